@@ -1,0 +1,142 @@
+//! Blocks: intersections of solids.
+
+use quadric::{IntervalSet, Ray, Solid};
+
+use crate::ComplexError;
+
+/// How light passes a block. The kernel only uses it for ownership (SPEC §3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Opacity {
+    /// Owns every point it contains.
+    Opaque,
+    /// Owns a point only where no opaque block and no earlier transparent block does.
+    Transparent,
+}
+
+/// An opaque key the kernel carries for its user (a material index, say).
+/// Overlapping transparent blocks with equal keys act as one medium.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
+pub struct MaterialKey(pub u32);
+
+/// The index of a block in a [`crate::Complex`], in insertion (= priority) order, from 0.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct BlockId(pub u32);
+
+impl BlockId {
+    /// The index as `usize`.
+    #[inline]
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// An intersection of solids: `Object_1 ∩ … ∩ Object_m`, with a name, an
+/// opacity and a material key.
+///
+/// ```
+/// use complex::{Block, MaterialKey, Opacity};
+/// use quadric::{HalfSpace, Quadric, Solid};
+/// let capped = Block::new(
+///     "post",
+///     vec![
+///         Solid::from(Quadric::tube_y()),
+///         Solid::from(HalfSpace::new(0.0, 1.0, 0.0, -1.0).unwrap()),
+///         Solid::from(HalfSpace::new(0.0, -1.0, 0.0, 0.0).unwrap()),
+///     ],
+///     Opacity::Opaque,
+///     MaterialKey(0),
+/// ).unwrap();
+/// assert_eq!(capped.solids().len(), 3);
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct Block {
+    name: String,
+    solids: Vec<Solid>,
+    opacity: Opacity,
+    material: MaterialKey,
+}
+
+impl Block {
+    /// A block; errors if it has no solids, a solid is not finite, or it has
+    /// more non-convex solids than an interval set can carry.
+    pub fn new(
+        name: impl Into<String>,
+        solids: Vec<Solid>,
+        opacity: Opacity,
+        material: MaterialKey,
+    ) -> Result<Self, ComplexError> {
+        let name = name.into();
+        if solids.is_empty() {
+            return Err(ComplexError::EmptyBlock { name });
+        }
+        for (index, s) in solids.iter().enumerate() {
+            let finite = match s {
+                Solid::Quadric(q) => q.is_finite(),
+                Solid::HalfSpace(h) => h.is_finite(),
+            };
+            if !finite {
+                return Err(ComplexError::NonFinite { name, solid: index });
+            }
+        }
+        let non_convex = solids.iter().filter(|s| s.max_intervals() > 1).count();
+        if non_convex >= IntervalSet::CAPACITY {
+            return Err(ComplexError::TooManyNonConvex { name, count: non_convex, max: IntervalSet::CAPACITY - 1 });
+        }
+        Ok(Block { name, solids, opacity, material })
+    }
+
+    /// The block's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The solids, in order; a hit reports the index into this slice.
+    pub fn solids(&self) -> &[Solid] {
+        &self.solids
+    }
+
+    /// Opaque or transparent.
+    pub fn opacity(&self) -> Opacity {
+        self.opacity
+    }
+
+    /// Whether the block is transparent.
+    pub fn is_transparent(&self) -> bool {
+        self.opacity == Opacity::Transparent
+    }
+
+    /// The material key.
+    pub fn material(&self) -> MaterialKey {
+        self.material
+    }
+
+    /// Whether `x` lies in every solid.
+    pub fn contains_point(&self, x: &quadric::nalgebra::Point3<f64>) -> bool {
+        self.solids.iter().all(|s| s.contains_point(x))
+    }
+
+    /// The set of `λ >= 0` inside the block: the intersection of its solids'
+    /// sets, each end tagged with the index of the solid it lies on. Stops as
+    /// soon as the running set is empty (seed 001's loop).
+    pub fn intervals(&self, ray: &Ray) -> IntervalSet {
+        let mut acc = IntervalSet::everything().clip(0.0, f64::INFINITY);
+        for (i, s) in self.solids.iter().enumerate() {
+            let i = i as u32;
+            acc = match s {
+                Solid::HalfSpace(h) => {
+                    let (enter, exit) = h.interval(ray, i);
+                    acc.intersect_interval(enter, exit)
+                }
+                Solid::Quadric(q) => {
+                    let set = q.intervals(ray, i);
+                    // Within capacity: checked in `Block::new`.
+                    acc.intersect(&set).unwrap_or_default()
+                }
+            };
+            if acc.is_empty() {
+                break;
+            }
+        }
+        acc
+    }
+}

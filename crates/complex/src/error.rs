@@ -1,0 +1,39 @@
+//! Typed errors for building blocks and complexes.
+
+/// Why a block or complex could not be built.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ComplexError {
+    /// A block without solids.
+    #[error("block \"{name}\" has no solids")]
+    EmptyBlock {
+        /// The block's name.
+        name: String,
+    },
+    /// A solid with a non-finite coefficient.
+    #[error("block \"{name}\", solid {solid}: a coefficient is not finite")]
+    NonFinite {
+        /// The block's name.
+        name: String,
+        /// Index of the solid in the block (0-based).
+        solid: usize,
+    },
+    /// More non-convex solids than an interval set can carry.
+    #[error("block \"{name}\" has {count} non-convex solids; at most {max} are supported")]
+    TooManyNonConvex {
+        /// The block's name.
+        name: String,
+        /// How many it has.
+        count: usize,
+        /// The limit.
+        max: usize,
+    },
+    /// An ε that is negative or not finite.
+    #[error("epsilon must be finite and >= 0, got {0}")]
+    BadEpsilon(f64),
+    /// More blocks than a block id can number.
+    #[error("a complex holds at most {max} blocks")]
+    TooManyBlocks {
+        /// The limit.
+        max: usize,
+    },
+}

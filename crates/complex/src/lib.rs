@@ -1,0 +1,20 @@
+//! # complex — unions of blocks of quadric solids
+//!
+//! A *complex* is `Block_1 ∪ … ∪ Block_n`, a *block* an intersection of
+//! solids from the [`quadric`] crate. This crate answers, for any ray, the
+//! first hit with its surface ([`Complex::cast_ray`]), the partition of the
+//! ray into segments owned by blocks under the priority rule
+//! ([`Complex::partition`]) and point membership ([`Complex::contains_point`]).
+#![deny(missing_docs)]
+
+mod block;
+mod bounds;
+mod complex;
+mod error;
+mod partition;
+
+pub use block::{Block, BlockId, MaterialKey, Opacity};
+pub use bounds::Aabb;
+pub use complex::{Complex, ComplexOptions, Hit};
+pub use error::ComplexError;
+pub use partition::{Event, Partition, Segment, Surface};

@@ -1,0 +1,127 @@
+//! Half-spaces `F(q) = { x : a x + b y + c z + d <= 0 }`, the cheap special case.
+
+use nalgebra::{Point3, Vector3, Vector4};
+
+use crate::interval::{Bound, IntervalSet};
+use crate::{GeometryError, Ray, Transform};
+
+/// A half-space `n·(x - o) + d <= 0` with `n = (a, b, c)`, stored around a
+/// reference point `o` (the origin unless moved) so that a plane moved far
+/// away keeps small coefficients, like [`crate::Quadric`].
+///
+/// ```
+/// use nalgebra::{Point3, Vector3};
+/// use quadric::{HalfSpace, Ray};
+/// let below = HalfSpace::new(0.0, 1.0, 0.0, -1.0).unwrap(); // y <= 1
+/// let up = Ray::new(Point3::origin(), Vector3::y()).unwrap();
+/// let set = below.intervals(&up, 0);
+/// assert_eq!((set.as_slice()[0].enter.t, set.as_slice()[0].exit.t), (0.0, 1.0));
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HalfSpace {
+    normal: Vector3<f64>,
+    d: f64,
+    origin: Vector3<f64>,
+}
+
+impl HalfSpace {
+    /// `a x + b y + c z + d <= 0`; `(a, b, c)` must be non-zero and all finite.
+    pub fn new(a: f64, b: f64, c: f64, d: f64) -> Result<Self, GeometryError> {
+        Self::from_vector(&Vector4::new(a, b, c, d))
+    }
+
+    /// From `q = (a, b, c, d)`.
+    pub fn from_vector(q: &Vector4<f64>) -> Result<Self, GeometryError> {
+        if !q.iter().all(|x| x.is_finite()) {
+            return Err(GeometryError::NonFinite { what: "a half-space coefficient" });
+        }
+        let normal = q.xyz();
+        if normal == Vector3::zeros() {
+            return Err(GeometryError::ZeroNormal);
+        }
+        Ok(HalfSpace { normal, d: q.w, origin: Vector3::zeros() })
+    }
+
+    /// The other half, `-q` (exact).
+    pub fn complement(&self) -> Self {
+        HalfSpace { normal: -self.normal, d: -self.d, origin: self.origin }
+    }
+
+    /// The half-space moved by `m`: `M⁻ᵀ q`, with the reference point moved exactly.
+    pub fn transformed(&self, m: &Transform) -> Self {
+        let normal = m.linear_inverse().transpose() * self.normal;
+        HalfSpace { normal, d: self.d, origin: m.apply_point(&Point3::from(self.origin)).coords }
+    }
+
+    /// `(a, b, c)`, not normalised.
+    pub fn normal_vector(&self) -> &Vector3<f64> {
+        &self.normal
+    }
+
+    /// The reference point `o`.
+    pub fn reference_point(&self) -> Point3<f64> {
+        Point3::from(self.origin)
+    }
+
+    /// World-space `q = (a, b, c, d)`.
+    pub fn vector(&self) -> Vector4<f64> {
+        Vector4::new(self.normal.x, self.normal.y, self.normal.z, self.d - self.normal.dot(&self.origin))
+    }
+
+    /// `n·(x - o) + d`; the half-space is where this is `<= 0`.
+    pub fn value(&self, x: &Point3<f64>) -> f64 {
+        self.normal.dot(&(x.coords - self.origin)) + self.d
+    }
+
+    /// Whether `x` lies in the closed half-space.
+    pub fn contains_point(&self, x: &Point3<f64>) -> bool {
+        self.value(x) <= 0.0
+    }
+
+    /// The outward unit normal `(a, b, c)/|(a, b, c)|` (the same everywhere).
+    pub fn normal(&self) -> Vector3<f64> {
+        // Non-zero by construction; a transform cannot make it zero.
+        crate::normal::unit(self.normal).unwrap_or_else(Vector3::y)
+    }
+
+    /// Whether every coefficient is finite.
+    pub fn is_finite(&self) -> bool {
+        self.normal.iter().chain(self.origin.iter()).all(|c| c.is_finite()) && self.d.is_finite()
+    }
+
+    /// The set of `λ >= 0` with `p + λr` inside; the finite end carries `solid`.
+    #[inline]
+    pub fn intervals(&self, ray: &Ray, solid: u32) -> IntervalSet {
+        let (enter, exit) = self.interval(ray, solid);
+        IntervalSet::from_interval(enter, exit)
+    }
+
+    /// The single interval (possibly empty: `enter.t >= exit.t`) of `λ >= 0`
+    /// inside the half-space: the allocation-free fast path blocks use.
+    #[inline(always)]
+    pub fn interval(&self, ray: &Ray, solid: u32) -> (Bound, Bound) {
+        let t = self.normal.dot(&ray.direction());
+        let u = self.value(&ray.origin());
+        let none = (Bound::free(f64::INFINITY), Bound::free(f64::INFINITY));
+        let all = (Bound::free(0.0), Bound::free(f64::INFINITY));
+        if t == 0.0 || !t.is_finite() {
+            return if u <= 0.0 { all } else { none };
+        }
+        let root = -u / t;
+        if !root.is_finite() {
+            return if u <= 0.0 { all } else { none };
+        }
+        if t > 0.0 {
+            // Inside before the plane.
+            if root < 0.0 {
+                none
+            } else {
+                (Bound::free(0.0), Bound::new(root, solid))
+            }
+        } else if root < 0.0 {
+            all
+        } else {
+            (Bound::new(root, solid), Bound::free(f64::INFINITY))
+        }
+    }
+}

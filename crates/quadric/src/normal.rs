@@ -1,0 +1,26 @@
+//! Unit normals from gradients.
+
+use nalgebra::Vector3;
+
+/// `g / |g|`, computed after scaling by the largest component so that tiny
+/// and huge gradients neither underflow nor overflow; `None` for a zero or
+/// non-finite gradient.
+#[inline]
+pub fn unit(g: Vector3<f64>) -> Option<Vector3<f64>> {
+    let m = g.amax();
+    if !(m > 0.0 && m.is_finite()) {
+        return None;
+    }
+    let g = g / m;
+    Some(g / g.norm())
+}
+
+/// `n` turned to face against the direction `r` of an incoming ray.
+#[inline]
+pub fn facing(n: Vector3<f64>, r: &Vector3<f64>) -> Vector3<f64> {
+    if n.dot(r) > 0.0 {
+        -n
+    } else {
+        n
+    }
+}

@@ -1,0 +1,283 @@
+//! Quadric solids `F(Q) = { x : [x;1]ᵀ Q [x;1] <= 0 }` and their ray intervals.
+
+use nalgebra::{Matrix3, Matrix4, Point3, Vector3};
+
+use crate::interval::{Bound, IntervalSet};
+use crate::roots::{difference_of_products, stable_roots};
+use crate::{GeometryError, Ray, Transform};
+
+/// A quadric solid, stored around a local centre `c`:
+///
+/// `f(x) = (x-c)ᵀ A (x-c) + 2 wᵀ(x-c) + k`, the solid being `f <= 0`.
+///
+/// Moving a solid moves `c` exactly and leaves `A`, `w` and `k` alone, so a
+/// unit sphere placed at distance 10⁹ keeps the coefficients of a unit
+/// sphere; the world-space matrix (with a constant term near 10¹⁸ that has
+/// lost the sphere's radius to rounding) is only formed on request.
+///
+/// ```
+/// use nalgebra::{Point3, Vector3};
+/// use quadric::{Quadric, Ray, Transform};
+/// let ball = Quadric::sphere().transformed(&Transform::translate(Vector3::new(0.0, 0.0, -5.0)).unwrap());
+/// let ray = Ray::new(Point3::origin(), -Vector3::z()).unwrap();
+/// let set = ball.intervals(&ray, 0);
+/// assert_eq!(set.len(), 1);
+/// assert_eq!((set.as_slice()[0].enter.t, set.as_slice()[0].exit.t), (4.0, 6.0));
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Quadric {
+    centre: Vector3<f64>,
+    a: Matrix3<f64>,
+    w: Vector3<f64>,
+    k: f64,
+}
+
+impl Quadric {
+    fn from_parts(centre: Vector3<f64>, a: Matrix3<f64>, w: Vector3<f64>, k: f64) -> Self {
+        Quadric { centre, a, w, k }
+    }
+
+    fn diagonal(a: f64, b: f64, c: f64, k: f64) -> Self {
+        Self::from_parts(Vector3::zeros(), Matrix3::from_diagonal(&Vector3::new(a, b, c)), Vector3::zeros(), k)
+    }
+
+    /// From the ten coefficients `[a, b, c, d, e, f, g, h, j, k]` of
+    /// `a x² + b y² + c z² + 2d xy + 2e xz + 2f yz + 2g x + 2h y + 2j z + k`.
+    pub fn from_coefficients(c: [f64; 10]) -> Result<Self, GeometryError> {
+        if !c.iter().all(|x| x.is_finite()) {
+            return Err(GeometryError::NonFinite { what: "a quadric coefficient" });
+        }
+        let [a, b, cc, d, e, f, g, h, j, k] = c;
+        let m = Matrix3::new(a, d, e, d, b, f, e, f, cc);
+        Ok(Self::from_parts(Vector3::zeros(), m, Vector3::new(g, h, j), k))
+    }
+
+    /// From a symmetric 4x4 matrix `Q` (exact symmetry is required).
+    pub fn from_matrix(q: &Matrix4<f64>) -> Result<Self, GeometryError> {
+        if !q.iter().all(|x| x.is_finite()) {
+            return Err(GeometryError::NonFinite { what: "a quadric matrix entry" });
+        }
+        for row in 0..4 {
+            for col in row + 1..4 {
+                if q[(row, col)] != q[(col, row)] {
+                    return Err(GeometryError::NotSymmetric { row, col });
+                }
+            }
+        }
+        let a = q.fixed_view::<3, 3>(0, 0).into_owned();
+        let w = q.fixed_view::<3, 1>(0, 3).into_owned();
+        Ok(Self::from_parts(Vector3::zeros(), a, w, q[(3, 3)]))
+    }
+
+    /// The unit ball `x² + y² + z² - 1 <= 0`; ellipsoids by scaling.
+    pub fn sphere() -> Self {
+        Self::diagonal(1.0, 1.0, 1.0, -1.0)
+    }
+
+    /// The infinite unit tube along x, `y² + z² - 1 <= 0`.
+    pub fn tube_x() -> Self {
+        Self::diagonal(0.0, 1.0, 1.0, -1.0)
+    }
+
+    /// The infinite unit tube along y, `x² + z² - 1 <= 0`.
+    pub fn tube_y() -> Self {
+        Self::diagonal(1.0, 0.0, 1.0, -1.0)
+    }
+
+    /// The infinite unit tube along z, `x² + y² - 1 <= 0`.
+    pub fn tube_z() -> Self {
+        Self::diagonal(1.0, 1.0, 0.0, -1.0)
+    }
+
+    /// The infinite double cone around y, `x² - y² + z² <= 0` (non-convex).
+    pub fn cone() -> Self {
+        Self::diagonal(1.0, -1.0, 1.0, 0.0)
+    }
+
+    /// The paraboloid opening up the y axis, `x² + z² - y <= 0`.
+    pub fn paraboloid() -> Self {
+        Self::from_parts(
+            Vector3::zeros(),
+            Matrix3::from_diagonal(&Vector3::new(1.0, 0.0, 1.0)),
+            Vector3::new(0.0, -0.5, 0.0),
+            0.0,
+        )
+    }
+
+    /// The solid one-sheet hyperboloid around y, `x² - y² + z² - 1 <= 0`
+    /// (the inside of the waisted tube; non-convex).
+    pub fn hyperboloid_one_sheet() -> Self {
+        Self::diagonal(1.0, -1.0, 1.0, -1.0)
+    }
+
+    /// The solid two-sheet hyperboloid around y, `x² - y² + z² + 1 <= 0`
+    /// (the inside of both bowls, `|y| >= 1`; non-convex).
+    pub fn hyperboloid_two_sheets() -> Self {
+        Self::diagonal(1.0, -1.0, 1.0, 1.0)
+    }
+
+    /// The other side of the surface, `-Q` (exact).
+    pub fn complement(&self) -> Self {
+        Self::from_parts(self.centre, -self.a, -self.w, -self.k)
+    }
+
+    /// The solid moved by `m`: `M⁻ᵀ Q M⁻¹`, computed as `L⁻ᵀ A L⁻¹` for the
+    /// quadratic part while the centre moves exactly by `m`.
+    pub fn transformed(&self, m: &Transform) -> Self {
+        let li = m.linear_inverse();
+        let a = li.transpose() * self.a * li;
+        // Exact symmetry (the product is symmetric up to rounding only).
+        let a = (a + a.transpose()) * 0.5;
+        let w = li.transpose() * self.w;
+        Self::from_parts(m.apply_point(&Point3::from(self.centre)).coords, a, w, self.k)
+    }
+
+    /// The local centre `c` the coefficients are taken around.
+    pub fn centre(&self) -> Point3<f64> {
+        Point3::from(self.centre)
+    }
+
+    /// The quadratic part `A` (upper-left 3x3 of `Q`).
+    pub fn quadratic_part(&self) -> &Matrix3<f64> {
+        &self.a
+    }
+
+    /// The world-space matrix `Q` (for export; loses accuracy far from the origin).
+    pub fn matrix(&self) -> Matrix4<f64> {
+        let c = self.centre;
+        let ac = self.a * c;
+        let w = self.w - ac;
+        let k = c.dot(&ac) - 2.0 * self.w.dot(&c) + self.k;
+        let mut q = self.a.to_homogeneous();
+        q.fixed_view_mut::<3, 1>(0, 3).copy_from(&w);
+        q.fixed_view_mut::<1, 3>(3, 0).copy_from(&w.transpose());
+        q[(3, 3)] = k;
+        q
+    }
+
+    /// The world-space coefficients `[a, b, c, d, e, f, g, h, j, k]`.
+    pub fn coefficients(&self) -> [f64; 10] {
+        let q = self.matrix();
+        [q[(0, 0)], q[(1, 1)], q[(2, 2)], q[(0, 1)], q[(0, 2)], q[(1, 2)], q[(0, 3)], q[(1, 3)], q[(2, 3)], q[(3, 3)]]
+    }
+
+    /// The coefficients relative to the local centre, as `(c, A, w, k)`.
+    pub fn local_parts(&self) -> (Point3<f64>, Matrix3<f64>, Vector3<f64>, f64) {
+        (Point3::from(self.centre), self.a, self.w, self.k)
+    }
+
+    /// `f(x)`, evaluated relative to the centre. The solid is `f <= 0`.
+    pub fn value(&self, x: &Point3<f64>) -> f64 {
+        let d = x.coords - self.centre;
+        d.dot(&(self.a * d + self.w)) + self.w.dot(&d) + self.k
+    }
+
+    /// Whether `x` lies in the closed solid.
+    pub fn contains_point(&self, x: &Point3<f64>) -> bool {
+        self.value(x) <= 0.0
+    }
+
+    /// The gradient `∇f(x) = 2 (A (x-c) + w)`, pointing out of the solid.
+    pub fn gradient(&self, x: &Point3<f64>) -> Vector3<f64> {
+        2.0 * (self.a * (x.coords - self.centre) + self.w)
+    }
+
+    /// The outward unit normal at `x` (the first three components of
+    /// `Q [x;1]`, normalised); `None` where the gradient vanishes (a cone's apex).
+    pub fn normal(&self, x: &Point3<f64>) -> Option<Vector3<f64>> {
+        crate::normal::unit(self.gradient(x))
+    }
+
+    /// Whether every ray meets the solid in at most one interval (`A` positive
+    /// semi-definite: ellipsoids, cylinders, paraboloids, slabs).
+    pub fn is_convex(&self) -> bool {
+        let e = self.a.symmetric_eigenvalues();
+        let scale = self.a.amax();
+        e.iter().all(|&l| l >= -1e-12 * scale)
+    }
+
+    /// Whether every coefficient is finite.
+    pub fn is_finite(&self) -> bool {
+        self.a.iter().chain(self.w.iter()).chain(self.centre.iter()).all(|c| c.is_finite()) && self.k.is_finite()
+    }
+
+    /// The coefficients `t` and `u` of `f(p + λr) = sλ² + 2tλ + u` for the
+    /// ray origin taken relative to the centre, `d = p - c`.
+    #[inline(always)]
+    fn tu(&self, d: &Vector3<f64>, r: &Vector3<f64>) -> (f64, f64) {
+        let g = self.a * d + self.w;
+        (r.dot(&g), d.dot(&(g + self.w)) + self.k)
+    }
+
+    /// The set of `λ >= 0` with `p + λr` inside the solid; every finite end
+    /// carries `solid` as the surface it lies on.
+    ///
+    /// Numerics (see `docs/quadric.md`): coefficients relative to the local
+    /// centre; stable roots; `t² - su` by a fused difference of products;
+    /// and when the roots cluster far along the ray (`|t² - su| < t²/4`, the
+    /// case where `t² - su` cancels), the ray is re-based at the midpoint
+    /// `λ₀ = -t/s` and the quadratic re-solved there, so the result stays
+    /// within a small multiple of the rounding floor of the hit point.
+    pub fn intervals(&self, ray: &Ray, solid: u32) -> IntervalSet {
+        let r = ray.direction();
+        let d = ray.origin().coords - self.centre;
+        let ar = self.a * r;
+        let s = r.dot(&ar);
+        let (t, u) = self.tu(&d, &r);
+        let set = if s == 0.0 {
+            linear_set(t, u, solid)
+        } else {
+            let disc = difference_of_products(t, t, s, u);
+            let (lambda0, t, u, disc) = if disc.abs() < 0.25 * t * t {
+                // Re-base at the midpoint of the roots: there t ≈ 0 and u is
+                // small, so nothing cancels.
+                let l0 = -t / s;
+                let d0 = Vector3::new(l0.mul_add(r.x, d.x), l0.mul_add(r.y, d.y), l0.mul_add(r.z, d.z));
+                let (t0, u0) = self.tu(&d0, &r);
+                (l0, t0, u0, difference_of_products(t0, t0, s, u0))
+            } else {
+                (0.0, t, u, disc)
+            };
+            quadratic_set(s, t, u, disc, lambda0, solid)
+        };
+        set.clip(0.0, f64::INFINITY)
+    }
+}
+
+/// `{λ : 2tλ + u <= 0}` (the `s = 0` rows of the table).
+#[inline]
+fn linear_set(t: f64, u: f64, solid: u32) -> IntervalSet {
+    if !(t.is_finite() && u.is_finite()) {
+        return IntervalSet::empty();
+    }
+    if t == 0.0 {
+        return if u <= 0.0 { IntervalSet::everything() } else { IntervalSet::empty() };
+    }
+    let root = -u / (2.0 * t);
+    if t > 0.0 {
+        IntervalSet::from_interval(Bound::free(f64::NEG_INFINITY), Bound::new(root, solid))
+    } else {
+        IntervalSet::from_interval(Bound::new(root, solid), Bound::free(f64::INFINITY))
+    }
+}
+
+/// `{λ : sλ² + 2tλ + u <= 0}` for `s != 0`, shifted by `lambda0`.
+#[inline]
+fn quadratic_set(s: f64, t: f64, u: f64, disc: f64, lambda0: f64, solid: u32) -> IntervalSet {
+    if !(disc.is_finite() && lambda0.is_finite()) {
+        return IntervalSet::empty();
+    }
+    if disc < 0.0 {
+        return if s > 0.0 { IntervalSet::empty() } else { IntervalSet::everything() };
+    }
+    let (r1, r2) = stable_roots(s, t, u, disc);
+    let (l1, l2) = (lambda0 + r1, lambda0 + r2);
+    if s > 0.0 {
+        IntervalSet::from_interval(Bound::new(l1, solid), Bound::new(l2, solid))
+    } else {
+        let low = IntervalSet::from_interval(Bound::free(f64::NEG_INFINITY), Bound::new(l1, solid));
+        let high = IntervalSet::from_interval(Bound::new(l2, solid), Bound::free(f64::INFINITY));
+        // Two disjoint pieces (or, if they touch, the whole line): within capacity.
+        low.union(&high).unwrap_or_else(|_| IntervalSet::everything())
+    }
+}

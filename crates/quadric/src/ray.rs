@@ -1,0 +1,69 @@
+//! Rays `p + λ r` with a unit direction, so that `λ` is a distance.
+
+use nalgebra::{Point3, Vector3};
+
+use crate::GeometryError;
+
+/// A ray `origin + λ · direction`, `λ >= 0`, with `|direction| = 1`.
+///
+/// ```
+/// use nalgebra::{Point3, Vector3};
+/// use quadric::Ray;
+/// let ray = Ray::new(Point3::origin(), Vector3::new(0.0, 0.0, -2.0)).unwrap();
+/// assert_eq!(ray.at(3.0), Point3::new(0.0, 0.0, -3.0));
+/// assert!(Ray::new(Point3::origin(), Vector3::zeros()).is_err());
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    origin: Point3<f64>,
+    direction: Vector3<f64>,
+}
+
+impl Ray {
+    /// A ray from `origin` along `direction`, which is normalised.
+    ///
+    /// Errors if either is not finite or the direction is zero.
+    pub fn new(origin: Point3<f64>, direction: Vector3<f64>) -> Result<Self, GeometryError> {
+        if !origin.iter().all(|c| c.is_finite()) {
+            return Err(GeometryError::NonFinite { what: "the ray origin" });
+        }
+        if !direction.iter().all(|c| c.is_finite()) {
+            return Err(GeometryError::NonFinite { what: "the ray direction" });
+        }
+        // Scale first so that tiny or huge directions normalise without
+        // underflow or overflow.
+        let m = direction.amax();
+        if m == 0.0 {
+            return Err(GeometryError::ZeroDirection);
+        }
+        let d = direction / m;
+        Ok(Ray { origin, direction: d / d.norm() })
+    }
+
+    /// The ray origin `p`.
+    #[inline]
+    pub fn origin(&self) -> Point3<f64> {
+        self.origin
+    }
+
+    /// The unit direction `r`.
+    #[inline]
+    pub fn direction(&self) -> Vector3<f64> {
+        self.direction
+    }
+
+    /// The point `p + λ r`.
+    #[inline]
+    pub fn at(&self, lambda: f64) -> Point3<f64> {
+        Point3::new(
+            lambda.mul_add(self.direction.x, self.origin.x),
+            lambda.mul_add(self.direction.y, self.origin.y),
+            lambda.mul_add(self.direction.z, self.origin.z),
+        )
+    }
+
+    /// The same line traversed the other way, starting at `at(lambda)`.
+    pub fn reversed_at(&self, lambda: f64) -> Ray {
+        Ray { origin: self.at(lambda), direction: -self.direction }
+    }
+}

@@ -1,0 +1,44 @@
+//! Numerically careful building blocks for `sλ² + 2tλ + u <= 0`.
+
+/// `a·b - c·d` with one rounding error (Kahan's algorithm with FMA):
+/// the error of the naive form, which cancels catastrophically when
+/// `a·b ≈ c·d`, is recovered exactly by the fused multiply-add.
+#[inline(always)]
+pub fn difference_of_products(a: f64, b: f64, c: f64, d: f64) -> f64 {
+    let cd = c * d;
+    let err = (-c).mul_add(d, cd);
+    let dop = a.mul_add(b, -cd);
+    dop + err
+}
+
+/// The two real roots of `sλ² + 2tλ + u` given `disc = t² - su >= 0`,
+/// in increasing order, by the stable form `q = -(t + copysign(√disc, t))`,
+/// `λ = q/s` and `u/q`: neither root is formed by cancelling `-t ± √disc`.
+///
+/// Requires `s != 0`. If `q == 0` (then `t = 0` and `disc = 0`, i.e. `u = 0`)
+/// both roots are 0.
+#[inline(always)]
+pub fn stable_roots(s: f64, t: f64, u: f64, disc: f64) -> (f64, f64) {
+    let q = -(t + disc.sqrt().copysign(t));
+    if q == 0.0 {
+        return (0.0, 0.0);
+    }
+    let (r1, r2) = (q / s, u / q);
+    if r1 <= r2 {
+        (r1, r2)
+    } else {
+        (r2, r1)
+    }
+}
+
+/// Whether `x` is negative, treating `-0.0` as zero.
+#[inline(always)]
+pub fn is_negative(x: f64) -> bool {
+    x < 0.0
+}
+
+/// Whether `x` is positive, treating `-0.0` as zero.
+#[inline(always)]
+pub fn is_positive(x: f64) -> bool {
+    x > 0.0
+}

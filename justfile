@@ -1,0 +1,18 @@
+# Komplex task runner (https://github.com/casey/just). Every recipe is a plain
+# cargo command, so nothing here is required to build or test.
+
+default: test
+
+# Run every test (the README's command).
+test:
+    cargo test --workspace
+
+# What CI runs.
+ci:
+    bash .ci/run
+
+fmt:
+    cargo fmt --all
+
+lint:
+    cargo clippy --workspace --all-targets -- -D warnings
