@@ -1,7 +1,20 @@
-//! Axis-aligned boxes, possibly infinite.
+//! Axis-aligned boxes, possibly infinite, and the tight box of a block.
+//!
+//! A block's box is found in two steps (see `docs/complex.md`):
+//!
+//! 1. *Analytic boxes* of its convex quadrics: an ellipsoid's box from the
+//!    inverse of its quadratic part, an elliptic cylinder's cross-section box
+//!    swept along its axis over the range its half-spaces allow.
+//! 2. *Interval constraint propagation*: every solid in turn narrows each
+//!    axis of the running box to the values it allows given the other axes'
+//!    ranges (a half-space exactly, a quadric by interval arithmetic on the
+//!    quadratic in that coordinate), until nothing moves.
+//!
+//! Every bound is rounded outwards, so the box is conservative: it never
+//! cuts off a point of the block.
 
-use quadric::nalgebra::Point3;
-use quadric::Ray;
+use quadric::nalgebra::{Matrix3, Point3, Vector3};
+use quadric::{Ray, Solid};
 
 /// An axis-aligned box `[min, max]`; coordinates may be `±∞` for unbounded blocks.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -81,5 +94,343 @@ impl Aabb {
         // Widen by a few ulps so rounding in the slab test never drops a grazing hit.
         let slack = 4.0 * f64::EPSILON * t1.abs().max(t0.abs());
         (t0 <= t1 + slack).then_some((t0, t1))
+    }
+}
+
+/// Relative widening applied to every computed bound: far above the rounding
+/// error of the few operations behind a bound, far below anything a user sees.
+const WIDEN: f64 = 1e-9;
+
+/// `x` moved outwards (down for a lower bound, up for an upper one) by a
+/// margin relative to the magnitudes `scale` the computation went through.
+#[inline]
+fn widen_down(x: f64, scale: f64) -> f64 {
+    x - WIDEN * (x.abs() + scale) - f64::MIN_POSITIVE
+}
+
+#[inline]
+fn widen_up(x: f64, scale: f64) -> f64 {
+    x + WIDEN * (x.abs() + scale) + f64::MIN_POSITIVE
+}
+
+/// The tight, conservative box of the intersection of `solids`; infinite on
+/// the axes where the block is unbounded, [`Aabb::EMPTY`] if it is provably empty.
+pub(crate) fn block_box(solids: &[Solid]) -> Aabb {
+    let mut bx = Aabb::INFINITE;
+    for s in solids {
+        if let Solid::Quadric(q) = s {
+            bx = bx.intersection(&analytic_box(q, solids));
+        }
+    }
+    if bx.is_empty() {
+        return Aabb::EMPTY;
+    }
+    for _round in 0..16 {
+        let before = bx;
+        for s in solids {
+            match s {
+                Solid::HalfSpace(h) => narrow_half_space(&mut bx, h),
+                Solid::Quadric(q) => narrow_quadric(&mut bx, q),
+            }
+            if bx.is_empty() {
+                return Aabb::EMPTY;
+            }
+        }
+        // Stop once a round gains less than a millionth of the extent.
+        let settled = (0..3).all(|i| {
+            let w = before.max[i] - before.min[i];
+            let gain = (bx.min[i] - before.min[i]) + (before.max[i] - bx.max[i]);
+            if w.is_finite() {
+                gain <= 1e-6 * w
+            } else {
+                bx.min[i] == before.min[i] && bx.max[i] == before.max[i]
+            }
+        });
+        if settled {
+            break;
+        }
+    }
+    bx
+}
+
+/// The structure of a convex quadric's quadratic part that has a bounded
+/// cross-section: `f(x) = (x - p)ᵀ A (x - p) - r` with `A` positive definite
+/// (an ellipsoid), or positive semi-definite of rank 2 with the linear part in
+/// its range (an elliptic cylinder around `p + s·axis`).
+enum Core {
+    /// Ellipsoid: centre, `A⁻¹`, `r`.
+    Ellipsoid { centre: Vector3<f64>, inverse: Matrix3<f64>, r: f64, margin: f64 },
+    /// Cylinder: a point on the axis, the unit axis, the pseudo-inverse of `A`, `r`.
+    Cylinder { point: Vector3<f64>, axis: Vector3<f64>, pinv: Matrix3<f64>, r: f64, margin: f64 },
+}
+
+fn core(q: &quadric::Quadric) -> Option<Core> {
+    let (c, a, w, k) = q.local_parts();
+    let eig = a.symmetric_eigen();
+    let top = eig.eigenvalues.amax();
+    if !(top > 0.0 && top.is_finite()) {
+        return None;
+    }
+    let tol = 1e-9 * top;
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
+    let (l0, l1) = (eig.eigenvalues[order[0]], eig.eigenvalues[order[1]]);
+    // Rounding error of the inverse grows with the condition number.
+    let cond = top / l1.abs().max(f64::MIN_POSITIVE);
+    let margin = 1e-9 + 64.0 * f64::EPSILON * cond;
+    if l0 > tol {
+        let inverse = a.cholesky()?.inverse();
+        let d0 = -(inverse * w);
+        // f = (d - d0)ᵀ A (d - d0) + k - wᵀA⁻¹w, so r = wᵀA⁻¹w - k = -(k + w·d0).
+        let r = -(k + w.dot(&d0));
+        let scale = k.abs() + w.dot(&d0).abs();
+        if r < -margin * scale {
+            return Some(Core::Ellipsoid { centre: c.coords + d0, inverse, r: -1.0, margin });
+        }
+        return Some(Core::Ellipsoid { centre: c.coords + d0, inverse, r: r.max(0.0) + margin * scale, margin });
+    }
+    if l0.abs() <= tol && l1 > tol {
+        let axis = eig.eigenvectors.column(order[0]).into_owned();
+        if w.dot(&axis).abs() > 1e-9 * w.norm() {
+            return None; // a parabolic cylinder: left to propagation
+        }
+        let mut pinv = Matrix3::zeros();
+        for &i in &order[1..] {
+            let v = eig.eigenvectors.column(i);
+            pinv += v * v.transpose() / eig.eigenvalues[i];
+        }
+        let d0 = -(pinv * w);
+        let r = -(k + w.dot(&d0));
+        let scale = k.abs() + w.dot(&d0).abs();
+        if r < -margin * scale {
+            return Some(Core::Cylinder { point: c.coords + d0, axis, pinv, r: -1.0, margin });
+        }
+        return Some(Core::Cylinder { point: c.coords + d0, axis, pinv, r: r.max(0.0) + margin * scale, margin });
+    }
+    None
+}
+
+/// The analytic box of a convex quadric: half-extent `sqrt(r (A⁻¹)ᵢᵢ)` around
+/// the centre of an ellipsoid; for a cylinder, its cross-section box swept
+/// along the axis over the range of `s` the block's half-spaces allow.
+fn analytic_box(q: &quadric::Quadric, solids: &[Solid]) -> Aabb {
+    match core(q) {
+        None => Aabb::INFINITE,
+        Some(Core::Ellipsoid { r, .. } | Core::Cylinder { r, .. }) if r < 0.0 => Aabb::EMPTY,
+        Some(Core::Ellipsoid { centre, inverse, r, margin }) => {
+            let mut bx = Aabb::EMPTY;
+            for i in 0..3 {
+                let h = (r * inverse[(i, i)].max(0.0)).sqrt();
+                let slack = margin * (h + centre[i].abs()) + f64::MIN_POSITIVE;
+                bx.min[i] = centre[i] - h - slack;
+                bx.max[i] = centre[i] + h + slack;
+            }
+            bx
+        }
+        Some(Core::Cylinder { point, axis, pinv, r, margin }) => {
+            // The support of the cross-section ellipse in direction n is
+            // sqrt(r nᵀA⁺n); a half-space n·x + d <= 0 met by some point
+            // p + s·axis + e of the tube needs (n·axis) s <= -d - n·p + support(n).
+            let support = |n: &Vector3<f64>| (r * n.dot(&(pinv * n)).max(0.0)).sqrt();
+            let (mut s0, mut s1) = (f64::NEG_INFINITY, f64::INFINITY);
+            for s in solids {
+                let Solid::HalfSpace(h) = s else { continue };
+                let n = *h.normal_vector();
+                let nv = n.dot(&axis);
+                if nv.abs() <= 1e-12 * n.norm() {
+                    continue;
+                }
+                // h.value(x) = n·(x - o) + d0; at x = point: h.value(point).
+                let at_point = h.value(&Point3::from(point));
+                let rhs = -at_point + support(&n);
+                let scale = at_point.abs() + support(&n) + n.norm() * point.norm();
+                let bound = rhs / nv;
+                if nv > 0.0 {
+                    s1 = s1.min(widen_up(bound, scale / nv.abs()));
+                } else {
+                    s0 = s0.max(widen_down(bound, scale / nv.abs()));
+                }
+            }
+            if s0 > s1 {
+                return Aabb::EMPTY;
+            }
+            let mut bx = Aabb::EMPTY;
+            for i in 0..3 {
+                let e = Vector3::ith(i, 1.0);
+                let h = support(&e);
+                let slack = margin * (h + point[i].abs()) + f64::MIN_POSITIVE;
+                let a = axis[i];
+                let (lo, hi) = if a == 0.0 {
+                    (0.0, 0.0)
+                } else {
+                    let (x, y) = (s0 * a, s1 * a);
+                    (x.min(y), x.max(y))
+                };
+                let sl = WIDEN * (s0.abs().max(s1.abs()) * a.abs());
+                bx.min[i] = point[i] + lo - h - slack - sl;
+                bx.max[i] = point[i] + hi + h + slack + sl;
+            }
+            bx
+        }
+    }
+}
+
+/// Closed interval `[lo, hi]` in extended arithmetic (`0 · ∞ = 0`, which is
+/// right for bounds: a zero coefficient constrains nothing).
+#[derive(Clone, Copy)]
+struct I(f64, f64);
+
+#[inline]
+fn mul0(a: f64, b: f64) -> f64 {
+    if a == 0.0 || b == 0.0 {
+        0.0
+    } else {
+        a * b
+    }
+}
+
+impl I {
+    fn scale(self, c: f64) -> I {
+        if c >= 0.0 {
+            I(mul0(c, self.0), mul0(c, self.1))
+        } else {
+            I(mul0(c, self.1), mul0(c, self.0))
+        }
+    }
+    fn mul(self, o: I) -> I {
+        let p = [mul0(self.0, o.0), mul0(self.0, o.1), mul0(self.1, o.0), mul0(self.1, o.1)];
+        I(p.iter().copied().fold(f64::INFINITY, f64::min), p.iter().copied().fold(f64::NEG_INFINITY, f64::max))
+    }
+    fn square(self) -> I {
+        if self.0 >= 0.0 {
+            I(self.0 * self.0, self.1 * self.1)
+        } else if self.1 <= 0.0 {
+            I(self.1 * self.1, self.0 * self.0)
+        } else {
+            I(0.0, (self.0 * self.0).max(self.1 * self.1))
+        }
+    }
+    fn add(self, o: I) -> I {
+        I(self.0 + o.0, self.1 + o.1)
+    }
+    fn mag(self) -> f64 {
+        self.0.abs().max(self.1.abs())
+    }
+}
+
+/// Narrows the box with `n·(x - o) + d <= 0`: on axis `i`,
+/// `nᵢ (xᵢ - oᵢ) <= -d - Σ_{j≠i} nⱼ (xⱼ - oⱼ)`.
+fn narrow_half_space(bx: &mut Aabb, h: &quadric::HalfSpace) {
+    let n = *h.normal_vector();
+    let o = h.reference_point();
+    let d = h.value(&o);
+    for i in 0..3 {
+        if n[i] == 0.0 {
+            continue;
+        }
+        let mut rest = I(d, d);
+        let mut mag = d.abs();
+        for j in (0..3).filter(|&j| j != i) {
+            let term = I(bx.min[j] - o[j], bx.max[j] - o[j]).scale(n[j]);
+            mag += term.0.abs();
+            rest = rest.add(term);
+        }
+        // The smallest the rest can be; -∞ means no information.
+        let lo = rest.0;
+        if !lo.is_finite() {
+            continue;
+        }
+        let bound = -lo / n[i];
+        let scale = mag / n[i].abs() + o[i].abs();
+        if n[i] > 0.0 {
+            let b = widen_up(o[i] + bound, scale);
+            if b < bx.max[i] {
+                bx.max[i] = b;
+            }
+        } else {
+            let b = widen_down(o[i] + bound, scale);
+            if b > bx.min[i] {
+                bx.min[i] = b;
+            }
+        }
+    }
+}
+
+/// Narrows the box with `f(x) <= 0`, written on axis `i` as
+/// `a dᵢ² + 2 B dᵢ + C <= 0` (`d = x - c`) with `B` and `C` intervals over the
+/// other axes. A feasible `dᵢ` satisfies `a dᵢ² + 2 B' dᵢ + C_lo <= 0` for `B'`
+/// one of `B`'s ends, so it lies in the hull of those two root intervals.
+fn narrow_quadric(bx: &mut Aabb, q: &quadric::Quadric) {
+    let (c, a, w, k) = q.local_parts();
+    for i in 0..3 {
+        let others: [usize; 2] = match i {
+            0 => [1, 2],
+            1 => [0, 2],
+            _ => [0, 1],
+        };
+        let dj = |j: usize| I(bx.min[j] - c[j], bx.max[j] - c[j]);
+        let mut b = I(w[i], w[i]);
+        let mut cc = I(k, k);
+        // Sum of the magnitudes behind C's lower end: its rounding scale.
+        let mut cmag = k.abs();
+        let mut add_c = |cc: &mut I, term: I| {
+            cmag += term.0.abs();
+            *cc = cc.add(term);
+        };
+        for &j in &others {
+            b = b.add(dj(j).scale(a[(i, j)]));
+            add_c(&mut cc, dj(j).square().scale(a[(j, j)]));
+            add_c(&mut cc, dj(j).scale(2.0 * w[j]));
+        }
+        add_c(&mut cc, dj(others[0]).mul(dj(others[1])).scale(2.0 * a[(others[0], others[1])]));
+        let (blo, bhi, clo) = (b.0, b.1, cc.0);
+        if !(blo.is_finite() && bhi.is_finite() && clo.is_finite()) {
+            continue;
+        }
+        let aii = a[(i, i)];
+        // The magnitude the bound was computed from, for the rounding margin.
+        let (lo, hi, scale) = if aii > 0.0 {
+            let roots = |bb: f64| {
+                let disc = bb * bb - aii * clo;
+                (disc >= 0.0).then(|| {
+                    let s = disc.sqrt();
+                    ((-bb - s) / aii, (-bb + s) / aii)
+                })
+            };
+            let scale = (b.mag() + (aii * cmag).sqrt()) / aii;
+            match (roots(blo), roots(bhi)) {
+                (None, None) => {
+                    // Only claim emptiness when it is not a rounding artefact.
+                    let margin = 1e-9 * (blo * blo + bhi * bhi + (aii * clo).abs());
+                    if blo * blo - aii * clo < -margin && bhi * bhi - aii * clo < -margin {
+                        *bx = Aabb::EMPTY;
+                        return;
+                    }
+                    continue;
+                }
+                (Some(r), None) | (None, Some(r)) => (r.0, r.1, scale),
+                (Some(r), Some(s)) => (r.0.min(s.0), r.1.max(s.1), scale),
+            }
+        } else if aii == 0.0 && blo > 0.0 {
+            // 2B dᵢ + C_lo <= 0 for some B in [blo, bhi]: dᵢ <= max_B(-C_lo / 2B).
+            (f64::NEG_INFINITY, (-clo / (2.0 * blo)).max(-clo / (2.0 * bhi)), cmag / blo)
+        } else if aii == 0.0 && bhi < 0.0 {
+            ((-clo / (2.0 * blo)).min(-clo / (2.0 * bhi)), f64::INFINITY, cmag / -bhi)
+        } else {
+            continue;
+        };
+        let scale = scale + c[i].abs();
+        let lo = widen_down(c[i] + lo, scale);
+        let hi = widen_up(c[i] + hi, scale);
+        if lo > bx.min[i] {
+            bx.min[i] = lo;
+        }
+        if hi < bx.max[i] {
+            bx.max[i] = hi;
+        }
+        if bx.min[i] > bx.max[i] {
+            *bx = Aabb::EMPTY;
+            return;
+        }
     }
 }
