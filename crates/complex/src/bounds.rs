@@ -122,6 +122,7 @@ pub(crate) fn block_box(solids: &[Solid]) -> Aabb {
             bx = bx.intersection(&analytic_box(q, solids));
         }
     }
+    bx = bx.intersection(&polytope_box(solids));
     if bx.is_empty() {
         return Aabb::EMPTY;
     }
@@ -150,6 +151,78 @@ pub(crate) fn block_box(solids: &[Solid]) -> Aabb {
             break;
         }
     }
+    bx
+}
+
+/// The box of the polyhedron cut out by the block's half-spaces, if it is
+/// bounded (else infinite): the hull of its vertices, every intersection of
+/// three planes that satisfies all half-spaces. It is bounded exactly when
+/// the normals span space and no edge direction `±(nₐ × n_b)` is a direction
+/// of recession (`nₖ·d <= 0` for all `k`). This covers rotated boxes, where
+/// propagation alone cannot start from an infinite box.
+fn polytope_box(solids: &[Solid]) -> Aabb {
+    let planes: Vec<(Vector3<f64>, f64)> = solids
+        .iter()
+        .filter_map(|s| match s {
+            Solid::HalfSpace(h) => {
+                let n = *h.normal_vector();
+                let m = n.norm();
+                // n·x + (d - n·o) <= 0, normalised.
+                let off = h.value(&Point3::origin());
+                Some((n / m, off / m))
+            }
+            Solid::Quadric(_) => None,
+        })
+        .collect();
+    if planes.len() < 4 || planes.len() > 24 {
+        return Aabb::INFINITE;
+    }
+    // A direction of recession makes the polyhedron unbounded; treating
+    // near-recession as recession only loses tightness, never correctness.
+    let recedes = |d: &Vector3<f64>| planes.iter().all(|(n, _)| n.dot(d) <= 1e-9);
+    for (a, (na, _)) in planes.iter().enumerate() {
+        for (nb, _) in &planes[a + 1..] {
+            let d = na.cross(nb);
+            let m = d.norm();
+            if m < 1e-9 {
+                continue;
+            }
+            let d = d / m;
+            if recedes(&d) || recedes(&-d) {
+                return Aabb::INFINITE;
+            }
+        }
+    }
+    let scale = planes.iter().fold(0.0f64, |m, (_, off)| m.max(off.abs()));
+    let mut bx = Aabb::EMPTY;
+    let mut any = false;
+    for a in 0..planes.len() {
+        for b in a + 1..planes.len() {
+            for c in b + 1..planes.len() {
+                let m = Matrix3::from_rows(&[planes[a].0.transpose(), planes[b].0.transpose(), planes[c].0.transpose()]);
+                let det = m.determinant();
+                let Some(inv) = m.try_inverse() else { continue };
+                let v = inv * -Vector3::new(planes[a].1, planes[b].1, planes[c].1);
+                if !v.iter().all(|x| x.is_finite()) {
+                    continue;
+                }
+                // The vertex's rounding error grows as the planes near parallel;
+                // a too generous tolerance only adds a spurious far vertex.
+                let tol = (1e-9 + 1e-14 / det.abs()) * (scale + v.norm());
+                if planes.iter().all(|(n, off)| n.dot(&v) + off <= tol) {
+                    any = true;
+                    bx = bx.union(&Aabb { min: Point3::from(v), max: Point3::from(v) });
+                }
+            }
+        }
+    }
+    if !any {
+        // Bounded but no vertex found: empty, or too degenerate to tell.
+        return Aabb::INFINITE;
+    }
+    let slack = 1e-8 * (scale + (bx.max - bx.min).norm()) + f64::MIN_POSITIVE;
+    bx.min -= Vector3::repeat(slack);
+    bx.max += Vector3::repeat(slack);
     bx
 }
 

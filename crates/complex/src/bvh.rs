@@ -100,29 +100,6 @@ impl Bvh {
         bvh
     }
 
-    /// Whether the hierarchy holds no block.
-    pub(crate) fn is_empty(&self) -> bool {
-        self.nodes.is_empty()
-    }
-
-    /// The depth of the deepest leaf (the root is depth 1); for tests.
-    #[cfg(test)]
-    pub(crate) fn depth(&self) -> usize {
-        fn go(b: &Bvh, n: usize) -> usize {
-            let node = b.nodes[n];
-            if node.count > 0 {
-                1
-            } else {
-                1 + go(b, n + 1).max(go(b, node.start as usize))
-            }
-        }
-        if self.nodes.is_empty() {
-            0
-        } else {
-            go(self, 0)
-        }
-    }
-
     fn build_node(&mut self, work: &mut [Entry], depth: usize) -> usize {
         let (min, max) = bounds_of(work);
         let at = self.nodes.len();

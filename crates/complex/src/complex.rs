@@ -420,10 +420,12 @@ impl Complex {
         cuts.push(f64::INFINITY);
         for w in cuts.windows(2) {
             let (a, b) = (w[0], w[1]);
-            // Any point strictly inside (a, b) has the owner of the whole segment.
-            let mid = if b.is_finite() { a + 0.5 * (b - a) } else { a + 1.0 + a.abs() };
+            // No end lies strictly inside (a, b), so each interval covers all
+            // of it or none. (A midpoint test would fail between adjacent floats.)
             let owner = owner_of(
-                sets.iter().filter(|(_, s)| s.contains(mid)).map(|(id, _)| (*id, self.blocks[id.index()].opacity())),
+                sets.iter()
+                    .filter(|(_, s)| s.iter().any(|iv| iv.enter.t <= a && b <= iv.exit.t))
+                    .map(|(id, _)| (*id, self.blocks[id.index()].opacity())),
             );
             match out.segments.last_mut() {
                 Some(last) if last.owner == owner => last.end = b,
