@@ -199,7 +199,8 @@ fn polytope_box(solids: &[Solid]) -> Aabb {
     for a in 0..planes.len() {
         for b in a + 1..planes.len() {
             for c in b + 1..planes.len() {
-                let m = Matrix3::from_rows(&[planes[a].0.transpose(), planes[b].0.transpose(), planes[c].0.transpose()]);
+                let m =
+                    Matrix3::from_rows(&[planes[a].0.transpose(), planes[b].0.transpose(), planes[c].0.transpose()]);
                 let det = m.determinant();
                 let Some(inv) = m.try_inverse() else { continue };
                 let v = inv * -Vector3::new(planes[a].1, planes[b].1, planes[c].1);

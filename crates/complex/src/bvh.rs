@@ -251,7 +251,8 @@ fn sah_split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<usize
     let mut best: Option<(f64, usize, usize)> = None; // (cost, axis, bins on the left)
     for axis in 0..3 {
         let extent = cmax[axis] - cmin[axis];
-        if !(extent > 0.0) {
+        // Also skips NaN extents.
+        if extent.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
             continue;
         }
         let mut count = [0usize; BINS];

@@ -233,7 +233,8 @@ impl Complex {
     /// between two transparent blocks of the same material are not.
     pub fn is_visible(&self, event: &Event) -> bool {
         let opaque = |o: Option<BlockId>| o.is_some_and(|id| !self.blocks[id.index()].is_transparent());
-        !event.same_medium && !(opaque(event.before) && opaque(event.after))
+        let inside_opaque = opaque(event.before) && opaque(event.after);
+        !(event.same_medium || inside_opaque)
     }
 
     /// The first surface along the ray with `ε < t <= max_t`: the first
@@ -247,7 +248,8 @@ impl Complex {
     /// that starts inside, the exit from the connected run of blocks it
     /// starts in. No partition is built and nothing is allocated.
     pub fn cast_ray(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
-        if !(max_t > self.epsilon) {
+        // Also rejects a NaN `max_t`.
+        if max_t.partial_cmp(&self.epsilon) != Some(core::cmp::Ordering::Greater) {
             return None;
         }
         if !self.any_transparent {

@@ -19,7 +19,8 @@ fn scene(transparent_every: usize) -> (Complex, Vec<Ray>) {
         if i % 3 == 0 {
             solids.push(hs(0.0, 1.0, 0.0, 0.0).transformed(&m));
         }
-        let opacity = if transparent_every > 0 && i % transparent_every == 0 { Opacity::Transparent } else { Opacity::Opaque };
+        let opacity =
+            if transparent_every > 0 && i % transparent_every == 0 { Opacity::Transparent } else { Opacity::Opaque };
         blocks.push(Block::new("b", solids, opacity, MaterialKey(i as u32 % 3)).expect("valid"));
     }
     // An unbounded block too, so that list is exercised.

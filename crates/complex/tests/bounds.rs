@@ -35,7 +35,11 @@ fn ellipsoid_box_from_the_inverse() {
     let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
     let hx = ((2.0 * c).powi(2) + s.powi(2)).sqrt();
     let hy = ((2.0 * s).powi(2) + c.powi(2)).sqrt();
-    check(vec![Solid::from(Quadric::sphere().transformed(&m))], [10.0 - hx, -5.0 - hy, 2.5], [10.0 + hx, -5.0 + hy, 3.5]);
+    check(
+        vec![Solid::from(Quadric::sphere().transformed(&m))],
+        [10.0 - hx, -5.0 - hy, 2.5],
+        [10.0 + hx, -5.0 + hy, 3.5],
+    );
 }
 
 #[test]

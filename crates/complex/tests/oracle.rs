@@ -101,8 +101,11 @@ fn brute_events(c: &Complex, ray: &Ray) -> Vec<(f64, Option<BlockId>, Option<Blo
         })
         .collect();
     let transparent: Vec<bool> = c.blocks().iter().map(Block::is_transparent).collect();
-    let mut ends: Vec<f64> =
-        sets.iter().flat_map(|s| s.iter().flat_map(|iv| [iv.enter.t, iv.exit.t])).filter(|t| t.is_finite() && *t > 0.0).collect();
+    let mut ends: Vec<f64> = sets
+        .iter()
+        .flat_map(|s| s.iter().flat_map(|iv| [iv.enter.t, iv.exit.t]))
+        .filter(|t| t.is_finite() && *t > 0.0)
+        .collect();
     ends.sort_by(f64::total_cmp);
     ends.dedup();
     // The owner of the piece (a, b) between consecutive ends: every
