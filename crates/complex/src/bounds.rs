@@ -100,17 +100,22 @@ impl Aabb {
 /// Relative widening applied to every computed bound: far above the rounding
 /// error of the few operations behind a bound, far below anything a user sees.
 const WIDEN: f64 = 1e-9;
+/// Widening relative to the absolute coordinates involved (their rounding
+/// error is a few ulps; this is about a thousand).
+const WIDEN_ABS: f64 = 1e-13;
 
-/// `x` moved outwards (down for a lower bound, up for an upper one) by a
-/// margin relative to the magnitudes `scale` the computation went through.
+/// `x` moved down by a margin relative to the magnitudes `local` of the
+/// computation (taken around a local centre) and `abs` of the absolute
+/// coordinates it went through.
 #[inline]
-fn widen_down(x: f64, scale: f64) -> f64 {
-    x - WIDEN * (x.abs() + scale) - f64::MIN_POSITIVE
+fn widen_down(x: f64, local: f64, abs: f64) -> f64 {
+    x - WIDEN * local - WIDEN_ABS * (x.abs() + abs) - f64::MIN_POSITIVE
 }
 
+/// `x` moved up; see [`widen_down`].
 #[inline]
-fn widen_up(x: f64, scale: f64) -> f64 {
-    x + WIDEN * (x.abs() + scale) + f64::MIN_POSITIVE
+fn widen_up(x: f64, local: f64, abs: f64) -> f64 {
+    x + WIDEN * local + WIDEN_ABS * (x.abs() + abs) + f64::MIN_POSITIVE
 }
 
 /// The tight, conservative box of the intersection of `solids`; infinite on
@@ -221,21 +226,23 @@ fn polytope_box(solids: &[Solid]) -> Aabb {
         // Bounded but no vertex found: empty, or too degenerate to tell.
         return Aabb::INFINITE;
     }
-    let slack = 1e-8 * (scale + (bx.max - bx.min).norm()) + f64::MIN_POSITIVE;
+    let slack = 1e-8 * (bx.max - bx.min).norm()
+        + WIDEN_ABS * 10.0 * (scale + bx.min.coords.amax().max(bx.max.coords.amax()))
+        + f64::MIN_POSITIVE;
     bx.min -= Vector3::repeat(slack);
     bx.max += Vector3::repeat(slack);
     bx
 }
 
-/// The structure of a convex quadric's quadratic part that has a bounded
-/// cross-section: `f(x) = (x - p)ᵀ A (x - p) - r` with `A` positive definite
-/// (an ellipsoid), or positive semi-definite of rank 2 with the linear part in
-/// its range (an elliptic cylinder around `p + s·axis`).
+/// The structure of a quadric whose cross-sections are bounded ellipses.
 enum Core {
-    /// Ellipsoid: centre, `A⁻¹`, `r`.
+    /// `(x - centre)ᵀ A (x - centre) <= r`, `A` positive definite: an
+    /// ellipsoid, with `A⁻¹`.
     Ellipsoid { centre: Vector3<f64>, inverse: Matrix3<f64>, r: f64, margin: f64 },
-    /// Cylinder: a point on the axis, the unit axis, the pseudo-inverse of `A`, `r`.
-    Cylinder { point: Vector3<f64>, axis: Vector3<f64>, pinv: Matrix3<f64>, r: f64, margin: f64 },
+    /// `x = point + s·axis + q` with `q ⊥ axis` and `qᵀ A q <= r + spread·s²`:
+    /// an elliptic cylinder (`spread = 0`), a cone (`r = 0`) or a hyperboloid,
+    /// with `P` the pseudo-inverse of `A` on the plane across the axis.
+    Axial { point: Vector3<f64>, axis: Vector3<f64>, p: Matrix3<f64>, r: f64, spread: f64, margin: f64 },
 }
 
 fn core(q: &quadric::Quadric) -> Option<Core> {
@@ -249,103 +256,176 @@ fn core(q: &quadric::Quadric) -> Option<Core> {
     let mut order = [0usize, 1, 2];
     order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
     let (l0, l1) = (eig.eigenvalues[order[0]], eig.eigenvalues[order[1]]);
+    if l1 <= tol {
+        return None; // at most one positive direction: unbounded cross-sections
+    }
     // Rounding error of the inverse grows with the condition number.
-    let cond = top / l1.abs().max(f64::MIN_POSITIVE);
-    let margin = 1e-9 + 64.0 * f64::EPSILON * cond;
+    let smallest = if l0.abs() > tol { l0.abs().min(l1) } else { l1 };
+    let margin = 1e-9 + 64.0 * f64::EPSILON * top / smallest;
     if l0 > tol {
         let inverse = a.cholesky()?.inverse();
         let d0 = -(inverse * w);
         // f = (d - d0)ᵀ A (d - d0) + k - wᵀA⁻¹w, so r = wᵀA⁻¹w - k = -(k + w·d0).
         let r = -(k + w.dot(&d0));
         let scale = k.abs() + w.dot(&d0).abs();
-        if r < -margin * scale {
-            return Some(Core::Ellipsoid { centre: c.coords + d0, inverse, r: -1.0, margin });
-        }
-        return Some(Core::Ellipsoid { centre: c.coords + d0, inverse, r: r.max(0.0) + margin * scale, margin });
+        let r = if r < -margin * scale { -1.0 } else { r.max(0.0) + margin * scale };
+        return Some(Core::Ellipsoid { centre: c.coords + d0, inverse, r, margin });
     }
-    if l0.abs() <= tol && l1 > tol {
-        let axis = eig.eigenvectors.column(order[0]).into_owned();
+    let axis = eig.eigenvectors.column(order[0]).into_owned();
+    let mut p = Matrix3::zeros();
+    for &i in &order[1..] {
+        let v = eig.eigenvectors.column(i);
+        p += v * v.transpose() / eig.eigenvalues[i];
+    }
+    let (d0, spread) = if l0.abs() <= tol {
         if w.dot(&axis).abs() > 1e-9 * w.norm() {
             return None; // a parabolic cylinder: left to propagation
         }
-        let mut pinv = Matrix3::zeros();
-        for &i in &order[1..] {
-            let v = eig.eigenvectors.column(i);
-            pinv += v * v.transpose() / eig.eigenvalues[i];
-        }
-        let d0 = -(pinv * w);
-        let r = -(k + w.dot(&d0));
-        let scale = k.abs() + w.dot(&d0).abs();
-        if r < -margin * scale {
-            return Some(Core::Cylinder { point: c.coords + d0, axis, pinv, r: -1.0, margin });
-        }
-        return Some(Core::Cylinder { point: c.coords + d0, axis, pinv, r: r.max(0.0) + margin * scale, margin });
+        // A slightly negative l0 (rounding) makes a very slender hyperboloid:
+        // keep its spread so the box stays conservative.
+        (-(p * w), (-l0).max(0.0))
+    } else {
+        // One negative direction: a cone or a hyperboloid around the axis.
+        (-(p * w) - axis * (axis.dot(&w) / l0), -l0)
+    };
+    let r = -(k + w.dot(&d0));
+    let scale = k.abs() + w.dot(&d0).abs();
+    let r = r + margin * scale;
+    let spread = spread * (1.0 + margin);
+    if spread == 0.0 && r < 0.0 {
+        return Some(Core::Ellipsoid { centre: c.coords + d0, inverse: p, r: -1.0, margin });
     }
-    None
+    // A two-sheet hyperboloid (r < 0) lies inside its asymptotic cone (r = 0).
+    Some(Core::Axial { point: c.coords + d0, axis, p, r: r.max(0.0), spread, margin })
 }
 
-/// The analytic box of a convex quadric: half-extent `sqrt(r (A⁻¹)ᵢᵢ)` around
-/// the centre of an ellipsoid; for a cylinder, its cross-section box swept
-/// along the axis over the range of `s` the block's half-spaces allow.
+/// The analytic box of a quadric with bounded cross-sections: for an
+/// ellipsoid, half-extent `sqrt(r (A⁻¹)ᵢᵢ)` around its centre; for a
+/// cylinder, cone or hyperboloid, the range `[s0, s1]` of the axis
+/// parameter the block's half-spaces allow, and the cross-section boxes at
+/// both ends (the extent `s·axisᵢ ± sqrt((r + spread·s²) Pᵢᵢ)` is convex in
+/// `s`, so its extremes over the range are at the ends).
 fn analytic_box(q: &quadric::Quadric, solids: &[Solid]) -> Aabb {
     match core(q) {
         None => Aabb::INFINITE,
-        Some(Core::Ellipsoid { r, .. } | Core::Cylinder { r, .. }) if r < 0.0 => Aabb::EMPTY,
+        Some(Core::Ellipsoid { r, .. }) if r < 0.0 => Aabb::EMPTY,
         Some(Core::Ellipsoid { centre, inverse, r, margin }) => {
             let mut bx = Aabb::EMPTY;
             for i in 0..3 {
                 let h = (r * inverse[(i, i)].max(0.0)).sqrt();
-                let slack = margin * (h + centre[i].abs()) + f64::MIN_POSITIVE;
+                let slack = margin * h + WIDEN_ABS * centre[i].abs() + f64::MIN_POSITIVE;
                 bx.min[i] = centre[i] - h - slack;
                 bx.max[i] = centre[i] + h + slack;
             }
             bx
         }
-        Some(Core::Cylinder { point, axis, pinv, r, margin }) => {
-            // The support of the cross-section ellipse in direction n is
-            // sqrt(r nᵀA⁺n); a half-space n·x + d <= 0 met by some point
-            // p + s·axis + e of the tube needs (n·axis) s <= -d - n·p + support(n).
-            let support = |n: &Vector3<f64>| (r * n.dot(&(pinv * n)).max(0.0)).sqrt();
+        Some(Core::Axial { point, axis, p, r, spread, margin }) => {
             let (mut s0, mut s1) = (f64::NEG_INFINITY, f64::INFINITY);
             for s in solids {
                 let Solid::HalfSpace(h) = s else { continue };
-                let n = *h.normal_vector();
-                let nv = n.dot(&axis);
-                if nv.abs() <= 1e-12 * n.norm() {
-                    continue;
-                }
-                // h.value(x) = n·(x - o) + d0; at x = point: h.value(point).
-                let at_point = h.value(&Point3::from(point));
-                let rhs = -at_point + support(&n);
-                let scale = at_point.abs() + support(&n) + n.norm() * point.norm();
-                let bound = rhs / nv;
-                if nv > 0.0 {
-                    s1 = s1.min(widen_up(bound, scale / nv.abs()));
-                } else {
-                    s0 = s0.max(widen_down(bound, scale / nv.abs()));
+                match axial_range(h, &point, &axis, &p, r, spread) {
+                    Some((lo, hi)) => {
+                        s0 = s0.max(lo);
+                        s1 = s1.min(hi);
+                    }
+                    None => return Aabb::EMPTY,
                 }
             }
             if s0 > s1 {
                 return Aabb::EMPTY;
             }
+            if !(s0.is_finite() && s1.is_finite()) {
+                // Unbounded along the axis: only the axes across it are
+                // bounded, and only for a cylinder.
+                let mut bx = Aabb::INFINITE;
+                if spread == 0.0 {
+                    for i in 0..3 {
+                        if axis[i] == 0.0 {
+                            let h = (r * p[(i, i)].max(0.0)).sqrt();
+                            let slack = margin * h + WIDEN_ABS * point[i].abs() + f64::MIN_POSITIVE;
+                            bx.min[i] = point[i] - h - slack;
+                            bx.max[i] = point[i] + h + slack;
+                        }
+                    }
+                }
+                return bx;
+            }
             let mut bx = Aabb::EMPTY;
             for i in 0..3 {
-                let e = Vector3::ith(i, 1.0);
-                let h = support(&e);
-                let slack = margin * (h + point[i].abs()) + f64::MIN_POSITIVE;
-                let a = axis[i];
-                let (lo, hi) = if a == 0.0 {
-                    (0.0, 0.0)
-                } else {
-                    let (x, y) = (s0 * a, s1 * a);
-                    (x.min(y), x.max(y))
-                };
-                let sl = WIDEN * (s0.abs().max(s1.abs()) * a.abs());
-                bx.min[i] = point[i] + lo - h - slack - sl;
-                bx.max[i] = point[i] + hi + h + slack + sl;
+                for s in [s0, s1] {
+                    let h = ((r + spread * s * s) * p[(i, i)].max(0.0)).sqrt();
+                    let c = point[i] + s * axis[i];
+                    let slack = margin * (h + s.abs()) + WIDEN_ABS * (c.abs() + point[i].abs()) + f64::MIN_POSITIVE;
+                    bx.min[i] = bx.min[i].min(c - h - slack);
+                    bx.max[i] = bx.max[i].max(c + h + slack);
+                }
             }
             bx
         }
+    }
+}
+
+/// The range of `s` over which some point `point + s·axis + q` of the
+/// cross-section ellipse (`qᵀAq <= r + spread·s²`) satisfies the half-space
+/// `n·x + c <= 0`: `a s + c <= sqrt(α + β s²)` with `a = n·axis`,
+/// `α = r g`, `β = spread g`, `g = nᵀPn` (the support of the ellipse in
+/// direction `n`). When the plane is steeper than the cone (`a² > β`) the
+/// left side minus the right is monotone in `s`, giving a half-line found by
+/// bisection; otherwise the whole line. `None`: no `s` at all.
+fn axial_range(
+    h: &quadric::HalfSpace,
+    point: &Vector3<f64>,
+    axis: &Vector3<f64>,
+    p: &Matrix3<f64>,
+    r: f64,
+    spread: f64,
+) -> Option<(f64, f64)> {
+    let n = *h.normal_vector();
+    let scale_n = n.norm();
+    let n = n / scale_n;
+    let c = h.value(&Point3::from(*point)) / scale_n;
+    let a = n.dot(axis);
+    let g = n.dot(&(p * n)).max(0.0);
+    let (alpha, beta) = (r * g, spread * g);
+    // Require a clear margin so that rounding cannot flip monotonicity.
+    if a * a <= beta * (1.0 + 1e-6) + 1e-12 {
+        return Some((f64::NEG_INFINITY, f64::INFINITY));
+    }
+    let phi = |s: f64| a * s - (alpha + beta * s * s).max(0.0).sqrt() + c;
+    // phi is increasing for a > 0 (feasible: s <= root), decreasing for a < 0.
+    let sign = a.signum();
+    let (mut lo, mut hi) = (-1.0f64, 1.0f64);
+    let mut guard = 0;
+    while sign * phi(lo) > 0.0 || sign * phi(hi) < 0.0 {
+        if sign * phi(lo) > 0.0 {
+            lo *= 2.0;
+        }
+        if sign * phi(hi) < 0.0 {
+            hi *= 2.0;
+        }
+        guard += 1;
+        if guard > 2100 || !lo.is_finite() || !hi.is_finite() {
+            return Some((f64::NEG_INFINITY, f64::INFINITY));
+        }
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if sign * phi(mid) <= 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let local = c.abs() / a.abs() + lo.abs();
+    // `c` came from the absolute coordinates of the plane and the axis point.
+    let abs = (point.norm() + h.reference_point().coords.norm()) / a.abs();
+    if a > 0.0 {
+        Some((f64::NEG_INFINITY, widen_up(hi, local, abs)))
+    } else {
+        Some((widen_down(lo, local, abs), f64::INFINITY))
     }
 }
 
@@ -392,6 +472,19 @@ impl I {
     }
 }
 
+/// The largest absolute coordinate of the box on axis `j`.
+fn magnitude(bx: &Aabb, j: usize) -> f64 {
+    bx.min[j].abs().max(bx.max[j].abs())
+}
+
+fn finite_or_zero(x: f64) -> f64 {
+    if x.is_finite() {
+        x
+    } else {
+        0.0
+    }
+}
+
 /// Narrows the box with `n·(x - o) + d <= 0`: on axis `i`,
 /// `nᵢ (xᵢ - oᵢ) <= -d - Σ_{j≠i} nⱼ (xⱼ - oⱼ)`.
 fn narrow_half_space(bx: &mut Aabb, h: &quadric::HalfSpace) {
@@ -415,14 +508,18 @@ fn narrow_half_space(bx: &mut Aabb, h: &quadric::HalfSpace) {
             continue;
         }
         let bound = -lo / n[i];
-        let scale = mag / n[i].abs() + o[i].abs();
+        let local = mag / n[i].abs();
+        // The differences xⱼ - oⱼ round relative to the absolute coordinates.
+        // (An infinite side left the bound alone above, or has a zero coefficient.)
+        let abs =
+            (0..3).map(|j| finite_or_zero(n[j].abs() * (o[j].abs() + magnitude(bx, j)))).sum::<f64>() / n[i].abs();
         if n[i] > 0.0 {
-            let b = widen_up(o[i] + bound, scale);
+            let b = widen_up(o[i] + bound, local, abs);
             if b < bx.max[i] {
                 bx.max[i] = b;
             }
         } else {
-            let b = widen_down(o[i] + bound, scale);
+            let b = widen_down(o[i] + bound, local, abs);
             if b > bx.min[i] {
                 bx.min[i] = b;
             }
@@ -493,9 +590,11 @@ fn narrow_quadric(bx: &mut Aabb, q: &quadric::Quadric) {
         } else {
             continue;
         };
-        let scale = scale + c[i].abs();
-        let lo = widen_down(c[i] + lo, scale);
-        let hi = widen_up(c[i] + hi, scale);
+        // The differences xⱼ - cⱼ round relative to the absolute coordinates.
+        let abs =
+            c[i].abs() + others.iter().map(|&j| finite_or_zero(c[j].abs() + magnitude(bx, j))).fold(0.0, f64::max);
+        let lo = widen_down(c[i] + lo, scale, abs);
+        let hi = widen_up(c[i] + hi, scale, abs);
         if lo > bx.min[i] {
             bx.min[i] = lo;
         }

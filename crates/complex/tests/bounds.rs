@@ -55,7 +55,21 @@ fn capped_tubes_straight_and_tilted() {
 #[test]
 fn cone_nappe_cut_by_planes() {
     let nappe = vec![Solid::from(Quadric::cone()), hs(0.0, -1.0, 0.0, 1.0), hs(0.0, 1.0, 0.0, -2.0)];
-    check(nappe, [-2.0, 1.0, -2.0], [2.0, 2.0, 2.0]);
+    check(nappe.clone(), [-2.0, 1.0, -2.0], [2.0, 2.0, 2.0]);
+    // Tilted by 30° about z: the frustum's box is that of its two end discs
+    // (radius s at axis parameter s = 1, 2; axis u = (-sin, cos, 0)).
+    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    check(moved(&nappe, &rot_z(30.0)), [-2.0 * (s + c), c - s, -2.0], [2.0 * (c - s), 2.0 * (c + s), 2.0]);
+}
+
+#[test]
+fn hyperboloid_capped() {
+    let waist = vec![Solid::from(Quadric::hyperboloid_one_sheet()), hs(0.0, -1.0, 0.0, -1.0), hs(0.0, 1.0, 0.0, -2.0)];
+    let r = 5f64.sqrt();
+    check(waist.clone(), [-r, -1.0, -r], [r, 2.0, r]);
+    // Moved far away and turned: still bounded, same size.
+    let m = rot_z(90.0).then(&translate(1e4, -2e4, 3e4));
+    check(moved(&waist, &m), [1e4 - 2.0, -2e4 - r, 3e4 - r], [1e4 + 1.0, -2e4 + r, 3e4 + r]);
 }
 
 #[test]
@@ -98,6 +112,9 @@ fn bounded_block() -> impl Strategy<Value = Vec<Solid>> {
         Just(vec![Solid::from(Quadric::cone()), hs(0.0, -1.0, 0.0, 0.5), hs(0.0, 1.0, 0.0, -2.0)]),
         Just(cuboid([-1.0; 3], [1.0; 3])),
         Just(vec![Solid::from(Quadric::paraboloid()), hs(0.0, 1.0, 0.0, -2.0)]),
+        Just(vec![Solid::from(Quadric::hyperboloid_one_sheet()), hs(0.0, -1.0, 0.0, -1.0), hs(0.0, 1.0, 0.0, -2.0)]),
+        Just(vec![Solid::from(Quadric::hyperboloid_two_sheets()), hs(0.0, -1.0, 0.0, -0.5), hs(0.0, 1.0, 0.0, -2.0)]),
+        Just(vec![Solid::from(Quadric::cone()), hs(0.3, 1.0, 0.0, 1.0), hs(0.0, 1.0, 0.2, -2.0)]),
     ];
     (base, strategies::transform(), proptest::collection::vec(strategies::solid(), 0..=2)).prop_map(
         |(base, m, extra)| {
