@@ -164,7 +164,10 @@ pub(crate) fn block_box(solids: &[Solid]) -> Aabb {
 /// three planes that satisfies all half-spaces. It is bounded exactly when
 /// the normals span space and no edge direction `±(nₐ × n_b)` is a direction
 /// of recession (`nₖ·d <= 0` for all `k`). This covers rotated boxes, where
-/// propagation alone cannot start from an infinite box.
+/// propagation alone cannot start from an infinite box. Triples of nearly
+/// dependent normals (`|det| < 1e-10`) are skipped: their intersection is
+/// rounding noise far away; a vertex that only such a triple forms (a spike
+/// sharper than 10⁻¹⁰ rad) is the one case this does not cover.
 fn polytope_box(solids: &[Solid]) -> Aabb {
     let planes: Vec<(Vector3<f64>, f64)> = solids
         .iter()
@@ -207,6 +210,11 @@ fn polytope_box(solids: &[Solid]) -> Aabb {
                 let m =
                     Matrix3::from_rows(&[planes[a].0.transpose(), planes[b].0.transpose(), planes[c].0.transpose()]);
                 let det = m.determinant();
+                // Nearly dependent normals (two opposite faces and any third,
+                // say) meet far away or nowhere; their rounded "vertex" is noise.
+                if det.abs() < 1e-10 {
+                    continue;
+                }
                 let Some(inv) = m.try_inverse() else { continue };
                 let v = inv * -Vector3::new(planes[a].1, planes[b].1, planes[c].1);
                 if !v.iter().all(|x| x.is_finite()) {
@@ -214,7 +222,7 @@ fn polytope_box(solids: &[Solid]) -> Aabb {
                 }
                 // The vertex's rounding error grows as the planes near parallel;
                 // a too generous tolerance only adds a spurious far vertex.
-                let tol = (1e-9 + 1e-14 / det.abs()) * (scale + v.norm());
+                let tol = (1e-9 + 1e-15 / det.abs()) * (scale + v.norm());
                 if planes.iter().all(|(n, off)| n.dot(&v) + off <= tol) {
                     any = true;
                     bx = bx.union(&Aabb { min: Point3::from(v), max: Point3::from(v) });
