@@ -217,3 +217,62 @@ fn no_nan_from_degenerate_queries() {
     assert!(c.cast_ray(&r, f64::NAN).is_none());
     assert_eq!(c.contains_point(&Point3::new(f64::NAN, 0.0, 0.0)), None);
 }
+
+/// A small bounded block (ball, capped tube or cube of size 0.1–0.5) placed
+/// at random in `[-3, 3]³`, opaque or transparent with one of two materials.
+fn small_block() -> impl Strategy<Value = Spec> {
+    use crate::common::{cuboid, hs, post};
+    let shape = prop_oneof![
+        Just(vec![Solid::from(Quadric::sphere())]),
+        Just(post(0.0, 0.0, 1.0, -1.0, 1.0)),
+        Just(cuboid([-1.0; 3], [1.0; 3])),
+        Just(vec![Solid::from(Quadric::cone()), hs(0.0, -1.0, 0.0, 0.2), hs(0.0, 1.0, 0.0, -1.0)]),
+    ];
+    (shape, strategies::transform(), 0.05f64..0.25, strategies::point(3.0), any::<bool>(), 0u32..2).prop_map(
+        |(shape, m, size, at, transparent, material)| {
+            let m = quadric::Transform::scale(size)
+                .expect("finite")
+                .then(&m)
+                .then(&quadric::Transform::translate(at.coords).expect("finite"));
+            (shape.iter().map(|s| s.transformed(&m)).collect(), transparent, material)
+        },
+    )
+}
+
+/// The first visible change of owner after ε, by brute force.
+fn brute_first(c: &Complex, ray: &Ray) -> Option<(f64, Option<BlockId>, Option<BlockId>)> {
+    brute_events(c, ray).into_iter().find(|(t, b, a)| *t > c.epsilon() && visible(c, *b, *a))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases((ProptestConfig::default().cases / 16).max(8)))]
+
+    /// With a few hundred blocks the BVH is deep; it must find exactly the
+    /// hits brute force over every block finds, with and without transparency.
+    #[test]
+    fn bvh_agrees_with_brute_force_on_large_scenes(
+        specs in proptest::collection::vec(small_block(), 150..300),
+        rays in proptest::collection::vec(ray_spec(), 40),
+        all_opaque in any::<bool>(),
+    ) {
+        let specs: Vec<Spec> =
+            specs.into_iter().map(|(s, t, m)| (s, t && !all_opaque, m)).collect();
+        let c = build(&specs);
+        for ray in &rays {
+            let brute = brute_first(&c, ray);
+            let hit = c.cast_ray(ray, f64::INFINITY);
+            prop_assert_eq!(hit.map(|h| h.t), brute.map(|b| b.0));
+            if let (Some(h), Some((_, before, after))) = (hit, brute) {
+                prop_assert_eq!(Some(h.block), if h.entering { after } else { before });
+            }
+            let events: Vec<_> = c.partition(ray).events.iter().map(|e| (e.t, e.before, e.after)).collect();
+            prop_assert_eq!(events, brute_events(&c, ray));
+        }
+    }
+}
+
+#[test]
+fn a_complex_is_send_and_sync() {
+    fn check<T: Send + Sync>() {}
+    check::<Complex>();
+}
