@@ -73,13 +73,12 @@ pub struct Complex {
     any_transparent: bool,
 }
 
-/// Per-thread buffers the transparent path of `cast_ray` and `partition`
-/// reuse, so that after the first ray on a thread nothing is allocated.
+/// Per-thread buffers `partition_into` reuses, so that after the first ray
+/// on a thread it allocates only if `out` must grow.
 #[derive(Default)]
 struct Scratch {
     sets: Vec<(BlockId, IntervalSet)>,
     cuts: Vec<f64>,
-    partition: Partition,
 }
 
 thread_local! {
@@ -255,29 +254,99 @@ impl Complex {
         if !self.any_transparent {
             return self.cast_opaque(ray, max_t);
         }
-        let found = SCRATCH.with(|s| match s.try_borrow_mut() {
-            Ok(mut s) => {
-                let Scratch { sets, cuts, partition } = &mut *s;
-                self.partition_core(ray, max_t, sets, cuts, partition);
-                self.first_visible(partition, max_t)
-            }
-            Err(_) => {
-                let p = self.partition(ray);
-                self.first_visible(&p, max_t)
-            }
-        });
-        found.map(|e| Hit {
-            t: e.t,
-            point: e.point,
-            normal: e.normal,
-            entering: e.entering,
-            block: e.surface.block,
-            solid: e.surface.solid,
-        })
+        self.cast_general(ray, max_t)
     }
 
-    fn first_visible(&self, p: &Partition, max_t: f64) -> Option<Event> {
-        p.events.iter().find(|e| e.t > self.epsilon && self.is_visible(e)).filter(|e| e.t <= max_t).copied()
+    /// `cast_ray` with transparent blocks: walks the ends of the blocks'
+    /// intervals in order from ε, keeping the owner, until the owner changes
+    /// visibly. Each step is one front-to-back BVH query for the next end
+    /// (with early exit) and one for the blocks covering the ray just after
+    /// it; nothing is stored, so nothing is allocated.
+    fn cast_general(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
+        let rb = RayBoxes::new(ray);
+        let mut tau = self.epsilon;
+        let mut before = self.owner_after(ray, &rb, tau);
+        loop {
+            let t = self.next_end(ray, &rb, tau, max_t)?;
+            let after = self.owner_after(ray, &rb, t);
+            if after != before {
+                if self.visible_change(before, after) {
+                    if let Some(hit) = self.event_hit(ray, t, before, after) {
+                        return Some(hit);
+                    }
+                }
+                before = after;
+            }
+            tau = t;
+        }
+    }
+
+    /// The owner of the ray just after `t`: the blocks with an interval
+    /// `enter <= t < exit`, by the priority rule.
+    fn owner_after(&self, ray: &Ray, rb: &RayBoxes, t: f64) -> Option<BlockId> {
+        let (mut opaque, mut transparent) = (u32::MAX, u32::MAX);
+        let mut consider = |i: u32| {
+            let b = &self.blocks[i as usize];
+            let best = if b.is_transparent() { &mut transparent } else { &mut opaque };
+            if i < *best && b.intervals(ray).iter().any(|iv| iv.enter.t <= t && t < iv.exit.t) {
+                *best = i;
+            }
+        };
+        let mut t_hi = t;
+        self.bvh.traverse(rb, t, &mut t_hi, |i, _, _| consider(i));
+        for &i in &self.unbounded {
+            consider(i);
+        }
+        [opaque, transparent].into_iter().find(|&i| i != u32::MAX).map(BlockId)
+    }
+
+    /// The smallest finite end of any block's interval in `(tau, max_t]`.
+    fn next_end(&self, ray: &Ray, rb: &RayBoxes, tau: f64, max_t: f64) -> Option<f64> {
+        let mut best: Option<f64> = None;
+        let mut consider = |i: u32, t_max: &mut f64| {
+            for iv in self.blocks[i as usize].intervals(ray).iter() {
+                for e in [iv.enter.t, iv.exit.t] {
+                    if e > tau && e <= *t_max && e.is_finite() && best.map_or(true, |b| e < b) {
+                        best = Some(e);
+                        *t_max = e;
+                    }
+                }
+            }
+        };
+        let mut t_max = max_t;
+        for &i in &self.unbounded {
+            consider(i, &mut t_max);
+        }
+        self.bvh.traverse(rb, tau, &mut t_max, |i, _, t_max| consider(i, t_max));
+        best
+    }
+
+    /// Whether a change of owner from `before` to `after` is an interface
+    /// (see [`Complex::is_visible`]).
+    fn visible_change(&self, before: Option<BlockId>, after: Option<BlockId>) -> bool {
+        let (Some(b), Some(a)) = (before, after) else { return true };
+        let (b, a) = (&self.blocks[b.index()], &self.blocks[a.index()]);
+        match (b.is_transparent(), a.is_transparent()) {
+            (false, false) => false,
+            (true, true) => b.material() != a.material(),
+            _ => true,
+        }
+    }
+
+    /// The hit at a change of owner at `t`: the entry of the new owner if it
+    /// starts there, else the exit of the old one (as in the partition).
+    fn event_hit(&self, ray: &Ray, t: f64, before: Option<BlockId>, after: Option<BlockId>) -> Option<Hit> {
+        let entry = after.and_then(|id| {
+            let set = self.blocks[id.index()].intervals(ray);
+            let solid = set.iter().find(|iv| iv.enter.t == t)?.enter.solid()?;
+            Some(self.hit(ray, t, id.0, solid, true))
+        });
+        entry.or_else(|| {
+            let id = before?;
+            let set = self.blocks[id.index()].intervals(ray);
+            let solid = set.iter().find(|iv| iv.exit.t == t)?.exit.solid()?;
+            Some(self.hit(ray, t, id.0, solid, false))
+        })
     }
 
     /// `cast_ray` for complexes of opaque blocks only.
@@ -391,7 +460,7 @@ impl Complex {
     pub fn partition_into(&self, ray: &Ray, out: &mut Partition) {
         SCRATCH.with(|s| match s.try_borrow_mut() {
             Ok(mut s) => {
-                let Scratch { sets, cuts, .. } = &mut *s;
+                let Scratch { sets, cuts } = &mut *s;
                 self.partition_core(ray, f64::INFINITY, sets, cuts, out);
             }
             Err(_) => self.partition_core(ray, f64::INFINITY, &mut Vec::new(), &mut Vec::new(), out),

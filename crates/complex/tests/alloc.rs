@@ -1,5 +1,4 @@
-//! `cast_ray` never allocates (after a thread's first transparent query
-//! has sized its scratch buffers).
+//! `cast_ray` never allocates, with or without transparent blocks.
 
 use complex::{Block, Complex, ComplexOptions, MaterialKey, Opacity};
 use proptest::prelude::*;
@@ -45,12 +44,9 @@ fn the_counter_sees_allocations() {
 fn cast_ray_does_not_allocate() {
     for transparent_every in [0, 4] {
         let (c, rays) = scene(transparent_every);
-        // Warm up: the transparent path sizes its per-thread buffers once.
-        let expected = hits(&c, &rays);
-        assert!(expected > 50, "the scene should be hit often, got {expected}");
         let mut n = 0;
         let info = allocation_counter::measure(|| n = hits(&c, &rays));
-        assert_eq!(n, expected);
+        assert!(n > 50, "the scene should be hit often, got {n}");
         assert_eq!(info.count_total, 0, "cast_ray allocated (transparent every {transparent_every})");
     }
 }
