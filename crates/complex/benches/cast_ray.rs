@@ -1,4 +1,5 @@
-//! `cast_ray` over 10, 1,000 and 100,000 random bounded opaque blocks.
+//! `cast_ray` over 10, 1,000 and 100,000 random bounded blocks, all opaque
+//! or every other one transparent.
 //!
 //! `cargo bench -p complex --bench cast_ray`. The blocks (balls, capped
 //! tubes and rotated boxes, radius 0.3–0.6) fill a cube whose side grows as
@@ -33,7 +34,7 @@ fn hs(a: f64, b: f64, c: f64, d: f64) -> Solid {
     Solid::from(HalfSpace::new(a, b, c, d).expect("valid"))
 }
 
-fn scene(n: usize) -> (Complex, Vec<Ray>) {
+fn scene(n: usize, transparent: bool) -> (Complex, Vec<Ray>) {
     let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ n as u64);
     let side = 2.0 * (n as f64).cbrt();
     let mut blocks = Vec::with_capacity(n);
@@ -60,7 +61,9 @@ fn scene(n: usize) -> (Complex, Vec<Ray>) {
             ],
         };
         let solids = unit.iter().map(|s| s.transformed(&m)).collect();
-        blocks.push(Block::new("b", solids, Opacity::Opaque, MaterialKey(0)).expect("valid"));
+        // Every other block transparent, in one of two materials.
+        let opacity = if transparent && blocks.len() % 2 == 0 { Opacity::Transparent } else { Opacity::Opaque };
+        blocks.push(Block::new("b", solids, opacity, MaterialKey(blocks.len() as u32 / 2 % 2)).expect("valid"));
     }
     let rays = (0..1024)
         .map(|_| {
@@ -74,7 +77,18 @@ fn scene(n: usize) -> (Complex, Vec<Ray>) {
 
 #[divan::bench(args = [10, 1_000, 100_000], sample_count = 20, sample_size = 4)]
 fn cast_ray(bencher: divan::Bencher, n: usize) {
-    let (c, rays) = scene(n);
+    run(bencher, n, false);
+}
+
+/// The same scenes with every other block transparent: the path that
+/// walks interval ends until the medium changes.
+#[divan::bench(args = [10, 1_000, 100_000], sample_count = 20, sample_size = 4)]
+fn cast_ray_half_transparent(bencher: divan::Bencher, n: usize) {
+    run(bencher, n, true);
+}
+
+fn run(bencher: divan::Bencher, n: usize, transparent: bool) {
+    let (c, rays) = scene(n, transparent);
     bencher.counter(ItemsCount::new(rays.len())).bench_local(|| {
         let mut hits = 0usize;
         for r in &rays {
