@@ -120,3 +120,18 @@ fn three_overlapping_blocks_follow_priority() {
     let owners: Vec<Option<&str>> = p.segments.iter().map(|s| s.owner.map(|id| name(&c, id))).collect();
     assert_eq!(owners, [None, Some("T1"), Some("O"), Some("T1"), Some("T2"), None]);
 }
+
+#[test]
+fn same_material_behind_an_opaque_block_is_one_medium() {
+    // As above with T2 in T1's material: from inside T1 past O (x = 3.5) the
+    // change to T2 at x = 6 is no interface; the next one is T2's exit.
+    let t1 = block("T1", cuboid([0.0, -1.0, -1.0], [6.0, 1.0, 1.0]), T, 1);
+    let o = block("O", cuboid([2.0, -1.0, -1.0], [3.0, 1.0, 1.0]), O, 0);
+    let t2 = block("T2", cuboid([1.0, -1.0, -1.0], [8.0, 1.0, 1.0]), T, 1);
+    let c = complex(vec![t1, o, t2]);
+    let hit = c.cast_ray(&ray([3.5, 0.0, 0.0], [1.0, 0.0, 0.0]), f64::INFINITY).expect("exit");
+    assert_eq!((hit.point.x, name(&c, hit.block), hit.entering), (8.0, "T2", false));
+    // From inside O, the next interface is O's back face into T1.
+    let hit = c.cast_ray(&ray([2.5, 0.0, 0.0], [1.0, 0.0, 0.0]), f64::INFINITY).expect("exit");
+    assert_eq!((hit.point.x, name(&c, hit.block), hit.entering), (3.0, "O", false));
+}
