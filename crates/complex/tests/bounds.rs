@@ -133,6 +133,7 @@ proptest! {
         solids in prop_oneof![3 => bounded_block(), 1 => proptest::collection::vec(strategies::solid(), 1..=3)],
         rays in proptest::collection::vec(strategies::ray(4.0), 8),
         points in proptest::collection::vec(strategies::point(6.0), 64),
+        unit in proptest::collection::vec((0.0f64..1.0, 0.0f64..1.0, 0.0f64..core::f64::consts::TAU), 16),
     ) {
         let b = Block::new("b", solids.clone(), Opacity::Opaque, MaterialKey(0)).expect("valid");
         let bx = box_of(solids);
@@ -151,6 +152,37 @@ proptest! {
                     let (a, z) = (iv.enter.t, iv.exit.t.min(iv.enter.t + 100.0));
                     for f in [0.0, 1e-9, 0.25, 0.5, 0.75, 1.0 - 1e-9, 1.0] {
                         samples.push(r.at(a + f * (z - a)));
+                    }
+                }
+            }
+        }
+        // Rays in planes just outside each face of a bounded box, in the
+        // plane's directions: a block point found on them is outside the
+        // box. This probes the block's extreme points, which random points
+        // almost never reach.
+        if bx.is_bounded() {
+            for i in 0..3 {
+                let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+                let w = |a: usize| bx.max[a] - bx.min[a];
+                for (side, offset) in [(0, 1e-7), (1, 1e-7), (0, 1e-4), (1, 1e-4), (0, 1e-2), (1, 1e-2)] {
+                    let plane = if side == 0 { bx.min[i] - offset * w(i) } else { bx.max[i] + offset * w(i) };
+                    for &(u, v, angle) in &unit {
+                        let mut o = Point3::origin();
+                        o[i] = plane;
+                        o[j] = bx.min[j] + (1.2 * u - 0.1) * w(j);
+                        o[k] = bx.min[k] + (1.2 * v - 0.1) * w(k);
+                        let mut d = Vector3::zeros();
+                        d[j] = angle.cos();
+                        d[k] = angle.sin();
+                        let Ok(r) = Ray::new(o, d) else { continue };
+                        for r in [r, r.reversed_at(0.0)] {
+                            for iv in b.intervals(&r).iter() {
+                                let (a, z) = (iv.enter.t, iv.exit.t.min(iv.enter.t + 100.0));
+                                for f in [0.0, 0.5, 1.0] {
+                                    samples.push(r.at(a + f * (z - a)));
+                                }
+                            }
+                        }
                     }
                 }
             }
