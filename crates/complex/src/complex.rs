@@ -185,13 +185,18 @@ impl Complex {
         let rb = RayBoxes::new(ray);
         let mut t_max = max_t;
         self.bvh.traverse(&rb, 0.0, &mut t_max, |i, _, _| push(i));
-        for &i in &self.unbounded {
-            let b = &self.boxes[i as usize];
-            if rb.enter(&b.min.coords.into(), &b.max.coords.into(), 0.0, max_t).is_some() {
-                push(i);
-            }
+        for i in self.unbounded_crossed(&rb, 0.0, max_t) {
+            push(i);
         }
         out.sort_unstable_by_key(|(id, _)| *id);
+    }
+
+    /// The unbounded blocks whose boxes the ray crosses within `[t_min, t_max]`.
+    fn unbounded_crossed<'a>(&'a self, rb: &'a RayBoxes, t_min: f64, t_max: f64) -> impl Iterator<Item = u32> + 'a {
+        self.unbounded.iter().copied().filter(move |&i| {
+            let b = &self.boxes[i as usize];
+            rb.enter(&b.min.coords.into(), &b.max.coords.into(), t_min, t_max).is_some()
+        })
     }
 
     /// The ε rule (SPEC §3): an interval contained in `[0, ε]` is no hit.
@@ -294,7 +299,7 @@ impl Complex {
         };
         let mut t_hi = t;
         self.bvh.traverse(rb, t, &mut t_hi, |i, _, _| consider(i));
-        for &i in &self.unbounded {
+        for i in self.unbounded_crossed(rb, t, t) {
             consider(i);
         }
         [opaque, transparent].into_iter().find(|&i| i != u32::MAX).map(BlockId)
@@ -314,7 +319,7 @@ impl Complex {
             }
         };
         let mut t_max = max_t;
-        for &i in &self.unbounded {
+        for i in self.unbounded_crossed(rb, tau, max_t) {
             consider(i, &mut t_max);
         }
         self.bvh.traverse(rb, tau, &mut t_max, |i, _, t_max| consider(i, t_max));
@@ -365,7 +370,7 @@ impl Complex {
         };
         let mut t_probe = eps;
         self.bvh.traverse(&rb, eps, &mut t_probe, |i, _, _| probe(i));
-        for &i in &self.unbounded {
+        for i in self.unbounded_crossed(&rb, eps, eps) {
             probe(i);
         }
         if run_end > eps {
@@ -385,7 +390,7 @@ impl Complex {
             }
         };
         let mut t_max = max_t;
-        for &i in &self.unbounded {
+        for i in self.unbounded_crossed(&rb, eps, max_t) {
             consider(i, &mut t_max);
         }
         self.bvh.traverse(&rb, eps, &mut t_max, |i, _, t_max| consider(i, t_max));
@@ -415,7 +420,7 @@ impl Complex {
             };
             let mut t_hi = run_end;
             self.bvh.traverse(rb, self.epsilon, &mut t_hi, |i, _, _| extend(i));
-            for &i in &self.unbounded {
+            for i in self.unbounded_crossed(rb, self.epsilon, run_end) {
                 extend(i);
             }
             if next > run_end {
@@ -461,24 +466,22 @@ impl Complex {
         SCRATCH.with(|s| match s.try_borrow_mut() {
             Ok(mut s) => {
                 let Scratch { sets, cuts } = &mut *s;
-                self.partition_core(ray, f64::INFINITY, sets, cuts, out);
+                self.partition_core(ray, sets, cuts, out);
             }
-            Err(_) => self.partition_core(ray, f64::INFINITY, &mut Vec::new(), &mut Vec::new(), out),
+            Err(_) => self.partition_core(ray, &mut Vec::new(), &mut Vec::new(), out),
         });
     }
 
-    /// The partition up to `max_t` (exact there; the last segment may
-    /// reach beyond it).
+    /// The partition, with caller-provided buffers for the sets and cuts.
     fn partition_core(
         &self,
         ray: &Ray,
-        max_t: f64,
         sets: &mut Vec<(BlockId, IntervalSet)>,
         cuts: &mut Vec<f64>,
         out: &mut Partition,
     ) {
         out.clear();
-        self.collect_sets(ray, max_t, sets);
+        self.collect_sets(ray, f64::INFINITY, sets);
         cuts.clear();
         cuts.push(0.0);
         for (_, s) in sets.iter() {
