@@ -1,7 +1,20 @@
-//! Axis-aligned boxes, possibly infinite.
+//! Axis-aligned boxes, possibly infinite, and the tight box of a block.
+//!
+//! A block's box is found in two steps (see `docs/complex.md`):
+//!
+//! 1. *Analytic boxes* of its convex quadrics: an ellipsoid's box from the
+//!    inverse of its quadratic part, an elliptic cylinder's cross-section box
+//!    swept along its axis over the range its half-spaces allow.
+//! 2. *Interval constraint propagation*: every solid in turn narrows each
+//!    axis of the running box to the values it allows given the other axes'
+//!    ranges (a half-space exactly, a quadric by interval arithmetic on the
+//!    quadratic in that coordinate), until nothing moves.
+//!
+//! Every bound is rounded outwards, so the box is conservative: it never
+//! cuts off a point of the block.
 
-use quadric::nalgebra::Point3;
-use quadric::Ray;
+use quadric::nalgebra::{Matrix3, Point3, Vector3};
+use quadric::{Ray, Solid};
 
 /// An axis-aligned box `[min, max]`; coordinates may be `±∞` for unbounded blocks.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -81,5 +94,524 @@ impl Aabb {
         // Widen by a few ulps so rounding in the slab test never drops a grazing hit.
         let slack = 4.0 * f64::EPSILON * t1.abs().max(t0.abs());
         (t0 <= t1 + slack).then_some((t0, t1))
+    }
+}
+
+/// Relative widening applied to every computed bound: far above the rounding
+/// error of the few operations behind a bound, far below anything a user sees.
+const WIDEN: f64 = 1e-9;
+/// Widening relative to the absolute coordinates involved (their rounding
+/// error is a few ulps; this is about a thousand).
+const WIDEN_ABS: f64 = 1e-13;
+
+/// `x` moved down by a margin relative to the magnitudes `local` of the
+/// computation (taken around a local centre) and `abs` of the absolute
+/// coordinates it went through.
+#[inline]
+fn widen_down(x: f64, local: f64, abs: f64) -> f64 {
+    x - WIDEN * local - WIDEN_ABS * (x.abs() + abs) - f64::MIN_POSITIVE
+}
+
+/// `x` moved up; see [`widen_down`].
+#[inline]
+fn widen_up(x: f64, local: f64, abs: f64) -> f64 {
+    x + WIDEN * local + WIDEN_ABS * (x.abs() + abs) + f64::MIN_POSITIVE
+}
+
+/// The tight, conservative box of the intersection of `solids`; infinite on
+/// the axes where the block is unbounded, [`Aabb::EMPTY`] if it is provably empty.
+pub(crate) fn block_box(solids: &[Solid]) -> Aabb {
+    let mut bx = Aabb::INFINITE;
+    for s in solids {
+        if let Solid::Quadric(q) = s {
+            bx = bx.intersection(&analytic_box(q, solids));
+        }
+    }
+    bx = bx.intersection(&polytope_box(solids));
+    if bx.is_empty() {
+        return Aabb::EMPTY;
+    }
+    for _round in 0..16 {
+        let before = bx;
+        for s in solids {
+            match s {
+                Solid::HalfSpace(h) => narrow_half_space(&mut bx, h),
+                Solid::Quadric(q) => narrow_quadric(&mut bx, q),
+            }
+            if bx.is_empty() {
+                return Aabb::EMPTY;
+            }
+        }
+        // Stop once a round gains less than a millionth of the extent.
+        let settled = (0..3).all(|i| {
+            let w = before.max[i] - before.min[i];
+            let gain = (bx.min[i] - before.min[i]) + (before.max[i] - bx.max[i]);
+            if w.is_finite() {
+                gain <= 1e-6 * w
+            } else {
+                bx.min[i] == before.min[i] && bx.max[i] == before.max[i]
+            }
+        });
+        if settled {
+            break;
+        }
+    }
+    bx
+}
+
+/// The box of the polyhedron cut out by the block's half-spaces, if it is
+/// bounded (else infinite): the hull of its vertices, every intersection of
+/// three planes that satisfies all half-spaces. It is bounded exactly when
+/// the normals span space and no edge direction `±(nₐ × n_b)` is a direction
+/// of recession (`nₖ·d <= 0` for all `k`). This covers rotated boxes, where
+/// propagation alone cannot start from an infinite box. Triples of nearly
+/// dependent normals (`|det| < 1e-10`) are skipped: their intersection is
+/// rounding noise far away; a vertex that only such a triple forms (a spike
+/// sharper than 10⁻¹⁰ rad) is the one case this does not cover.
+fn polytope_box(solids: &[Solid]) -> Aabb {
+    let planes: Vec<(Vector3<f64>, f64)> = solids
+        .iter()
+        .filter_map(|s| match s {
+            Solid::HalfSpace(h) => {
+                let n = *h.normal_vector();
+                let m = n.norm();
+                // n·x + (d - n·o) <= 0, normalised.
+                let off = h.value(&Point3::origin());
+                Some((n / m, off / m))
+            }
+            Solid::Quadric(_) => None,
+        })
+        .collect();
+    if planes.len() < 4 || planes.len() > 24 {
+        return Aabb::INFINITE;
+    }
+    // A direction of recession makes the polyhedron unbounded; treating
+    // near-recession as recession only loses tightness, never correctness.
+    let recedes = |d: &Vector3<f64>| planes.iter().all(|(n, _)| n.dot(d) <= 1e-9);
+    for (a, (na, _)) in planes.iter().enumerate() {
+        for (nb, _) in &planes[a + 1..] {
+            let d = na.cross(nb);
+            let m = d.norm();
+            if m < 1e-9 {
+                continue;
+            }
+            let d = d / m;
+            if recedes(&d) || recedes(&-d) {
+                return Aabb::INFINITE;
+            }
+        }
+    }
+    let scale = planes.iter().fold(0.0f64, |m, (_, off)| m.max(off.abs()));
+    let mut bx = Aabb::EMPTY;
+    let mut any = false;
+    for a in 0..planes.len() {
+        for b in a + 1..planes.len() {
+            for c in b + 1..planes.len() {
+                let m =
+                    Matrix3::from_rows(&[planes[a].0.transpose(), planes[b].0.transpose(), planes[c].0.transpose()]);
+                let det = m.determinant();
+                // Nearly dependent normals (two opposite faces and any third,
+                // say) meet far away or nowhere; their rounded "vertex" is noise.
+                if det.abs() < 1e-10 {
+                    continue;
+                }
+                let Some(inv) = m.try_inverse() else { continue };
+                let v = inv * -Vector3::new(planes[a].1, planes[b].1, planes[c].1);
+                if !v.iter().all(|x| x.is_finite()) {
+                    continue;
+                }
+                // The vertex's rounding error grows as the planes near parallel;
+                // a too generous tolerance only adds a spurious far vertex.
+                let tol = (1e-9 + 1e-15 / det.abs()) * (scale + v.norm());
+                if planes.iter().all(|(n, off)| n.dot(&v) + off <= tol) {
+                    any = true;
+                    bx = bx.union(&Aabb { min: Point3::from(v), max: Point3::from(v) });
+                }
+            }
+        }
+    }
+    if !any {
+        // Bounded but no vertex found: empty, or too degenerate to tell.
+        return Aabb::INFINITE;
+    }
+    let slack = 1e-8 * (bx.max - bx.min).norm()
+        + WIDEN_ABS * 10.0 * (scale + bx.min.coords.amax().max(bx.max.coords.amax()))
+        + f64::MIN_POSITIVE;
+    bx.min -= Vector3::repeat(slack);
+    bx.max += Vector3::repeat(slack);
+    bx
+}
+
+/// The structure of a quadric whose cross-sections are bounded ellipses.
+enum Core {
+    /// `(x - centre)ᵀ A (x - centre) <= r`, `A` positive definite: an
+    /// ellipsoid, with `A⁻¹`.
+    Ellipsoid { centre: Vector3<f64>, inverse: Matrix3<f64>, r: f64, margin: f64 },
+    /// `x = point + s·axis + q` with `q ⊥ axis` and `qᵀ A q <= r + spread·s²`:
+    /// an elliptic cylinder (`spread = 0`), a cone (`r = 0`) or a hyperboloid,
+    /// with `P` the pseudo-inverse of `A` on the plane across the axis.
+    Axial { point: Vector3<f64>, axis: Vector3<f64>, p: Matrix3<f64>, r: f64, spread: f64, margin: f64 },
+}
+
+fn core(q: &quadric::Quadric) -> Option<Core> {
+    let (c, a, w, k) = q.local_parts();
+    let eig = a.symmetric_eigen();
+    let top = eig.eigenvalues.amax();
+    if !(top > 0.0 && top.is_finite()) {
+        return None;
+    }
+    let tol = 1e-9 * top;
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
+    let (l0, l1) = (eig.eigenvalues[order[0]], eig.eigenvalues[order[1]]);
+    if l1 <= tol {
+        return None; // at most one positive direction: unbounded cross-sections
+    }
+    // Rounding error of the inverse grows with the condition number.
+    let smallest = if l0.abs() > tol { l0.abs().min(l1) } else { l1 };
+    let margin = 1e-9 + 64.0 * f64::EPSILON * top / smallest;
+    if l0 > tol {
+        let inverse = a.cholesky()?.inverse();
+        let d0 = -(inverse * w);
+        // f = (d - d0)ᵀ A (d - d0) + k - wᵀA⁻¹w, so r = wᵀA⁻¹w - k = -(k + w·d0).
+        let r = -(k + w.dot(&d0));
+        let scale = k.abs() + w.dot(&d0).abs();
+        let r = if r < -margin * scale { -1.0 } else { r.max(0.0) + margin * scale };
+        return Some(Core::Ellipsoid { centre: c.coords + d0, inverse, r, margin });
+    }
+    let axis = eig.eigenvectors.column(order[0]).into_owned();
+    let mut p = Matrix3::zeros();
+    for &i in &order[1..] {
+        let v = eig.eigenvectors.column(i);
+        p += v * v.transpose() / eig.eigenvalues[i];
+    }
+    let (d0, spread) = if l0.abs() <= tol {
+        if w.dot(&axis).abs() > 1e-9 * w.norm() {
+            return None; // a parabolic cylinder: left to propagation
+        }
+        // A slightly negative l0 (rounding) makes a very slender hyperboloid:
+        // keep its spread so the box stays conservative.
+        (-(p * w), (-l0).max(0.0))
+    } else {
+        // One negative direction: a cone or a hyperboloid around the axis.
+        (-(p * w) - axis * (axis.dot(&w) / l0), -l0)
+    };
+    let r = -(k + w.dot(&d0));
+    let scale = k.abs() + w.dot(&d0).abs();
+    let r = r + margin * scale;
+    let spread = spread * (1.0 + margin);
+    if spread == 0.0 && r < 0.0 {
+        return Some(Core::Ellipsoid { centre: c.coords + d0, inverse: p, r: -1.0, margin });
+    }
+    // A two-sheet hyperboloid (r < 0) lies inside its asymptotic cone (r = 0).
+    Some(Core::Axial { point: c.coords + d0, axis, p, r: r.max(0.0), spread, margin })
+}
+
+/// The analytic box of a quadric with bounded cross-sections: for an
+/// ellipsoid, half-extent `sqrt(r (A⁻¹)ᵢᵢ)` around its centre; for a
+/// cylinder, cone or hyperboloid, the range `[s0, s1]` of the axis
+/// parameter the block's half-spaces allow, and the cross-section boxes at
+/// both ends (the extent `s·axisᵢ ± sqrt((r + spread·s²) Pᵢᵢ)` is convex in
+/// `s`, so its extremes over the range are at the ends).
+fn analytic_box(q: &quadric::Quadric, solids: &[Solid]) -> Aabb {
+    match core(q) {
+        None => Aabb::INFINITE,
+        Some(Core::Ellipsoid { r, .. }) if r < 0.0 => Aabb::EMPTY,
+        Some(Core::Ellipsoid { centre, inverse, r, margin }) => {
+            let mut bx = Aabb::EMPTY;
+            for i in 0..3 {
+                let h = (r * inverse[(i, i)].max(0.0)).sqrt();
+                let slack = margin * h + WIDEN_ABS * centre[i].abs() + f64::MIN_POSITIVE;
+                bx.min[i] = centre[i] - h - slack;
+                bx.max[i] = centre[i] + h + slack;
+            }
+            bx
+        }
+        Some(Core::Axial { point, axis, p, r, spread, margin }) => {
+            let (mut s0, mut s1) = (f64::NEG_INFINITY, f64::INFINITY);
+            for s in solids {
+                let Solid::HalfSpace(h) = s else { continue };
+                match axial_range(h, &point, &axis, &p, r, spread) {
+                    Some((lo, hi)) => {
+                        s0 = s0.max(lo);
+                        s1 = s1.min(hi);
+                    }
+                    None => return Aabb::EMPTY,
+                }
+            }
+            if s0 > s1 {
+                return Aabb::EMPTY;
+            }
+            if !(s0.is_finite() && s1.is_finite()) {
+                // Unbounded along the axis: only the axes across it are
+                // bounded, and only for a cylinder.
+                let mut bx = Aabb::INFINITE;
+                if spread == 0.0 {
+                    for i in 0..3 {
+                        if axis[i] == 0.0 {
+                            let h = (r * p[(i, i)].max(0.0)).sqrt();
+                            let slack = margin * h + WIDEN_ABS * point[i].abs() + f64::MIN_POSITIVE;
+                            bx.min[i] = point[i] - h - slack;
+                            bx.max[i] = point[i] + h + slack;
+                        }
+                    }
+                }
+                return bx;
+            }
+            let mut bx = Aabb::EMPTY;
+            for i in 0..3 {
+                for s in [s0, s1] {
+                    let h = ((r + spread * s * s) * p[(i, i)].max(0.0)).sqrt();
+                    let c = point[i] + s * axis[i];
+                    let slack = margin * (h + s.abs()) + WIDEN_ABS * (c.abs() + point[i].abs()) + f64::MIN_POSITIVE;
+                    bx.min[i] = bx.min[i].min(c - h - slack);
+                    bx.max[i] = bx.max[i].max(c + h + slack);
+                }
+            }
+            bx
+        }
+    }
+}
+
+/// The range of `s` over which some point `point + s·axis + q` of the
+/// cross-section ellipse (`qᵀAq <= r + spread·s²`) satisfies the half-space
+/// `n·x + c <= 0`: `a s + c <= sqrt(α + β s²)` with `a = n·axis`,
+/// `α = r g`, `β = spread g`, `g = nᵀPn` (the support of the ellipse in
+/// direction `n`). When the plane is steeper than the cone (`a² > β`) the
+/// left side minus the right is monotone in `s`, giving a half-line found by
+/// bisection; otherwise the whole line. `None`: no `s` at all.
+fn axial_range(
+    h: &quadric::HalfSpace,
+    point: &Vector3<f64>,
+    axis: &Vector3<f64>,
+    p: &Matrix3<f64>,
+    r: f64,
+    spread: f64,
+) -> Option<(f64, f64)> {
+    let n = *h.normal_vector();
+    let scale_n = n.norm();
+    let n = n / scale_n;
+    let c = h.value(&Point3::from(*point)) / scale_n;
+    let a = n.dot(axis);
+    let g = n.dot(&(p * n)).max(0.0);
+    let (alpha, beta) = (r * g, spread * g);
+    // Require a clear margin so that rounding cannot flip monotonicity.
+    if a * a <= beta * (1.0 + 1e-6) + 1e-12 {
+        return Some((f64::NEG_INFINITY, f64::INFINITY));
+    }
+    let phi = |s: f64| a * s - (alpha + beta * s * s).max(0.0).sqrt() + c;
+    // phi is increasing for a > 0 (feasible: s <= root), decreasing for a < 0.
+    let sign = a.signum();
+    let (mut lo, mut hi) = (-1.0f64, 1.0f64);
+    let mut guard = 0;
+    while sign * phi(lo) > 0.0 || sign * phi(hi) < 0.0 {
+        if sign * phi(lo) > 0.0 {
+            lo *= 2.0;
+        }
+        if sign * phi(hi) < 0.0 {
+            hi *= 2.0;
+        }
+        guard += 1;
+        if guard > 2100 || !lo.is_finite() || !hi.is_finite() {
+            return Some((f64::NEG_INFINITY, f64::INFINITY));
+        }
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if sign * phi(mid) <= 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let local = c.abs() / a.abs() + lo.abs();
+    // `c` came from the absolute coordinates of the plane and the axis point.
+    let abs = (point.norm() + h.reference_point().coords.norm()) / a.abs();
+    if a > 0.0 {
+        Some((f64::NEG_INFINITY, widen_up(hi, local, abs)))
+    } else {
+        Some((widen_down(lo, local, abs), f64::INFINITY))
+    }
+}
+
+/// Closed interval `[lo, hi]` in extended arithmetic (`0 · ∞ = 0`, which is
+/// right for bounds: a zero coefficient constrains nothing).
+#[derive(Clone, Copy)]
+struct I(f64, f64);
+
+#[inline]
+fn mul0(a: f64, b: f64) -> f64 {
+    if a == 0.0 || b == 0.0 {
+        0.0
+    } else {
+        a * b
+    }
+}
+
+impl I {
+    fn scale(self, c: f64) -> I {
+        if c >= 0.0 {
+            I(mul0(c, self.0), mul0(c, self.1))
+        } else {
+            I(mul0(c, self.1), mul0(c, self.0))
+        }
+    }
+    fn mul(self, o: I) -> I {
+        let p = [mul0(self.0, o.0), mul0(self.0, o.1), mul0(self.1, o.0), mul0(self.1, o.1)];
+        I(p.iter().copied().fold(f64::INFINITY, f64::min), p.iter().copied().fold(f64::NEG_INFINITY, f64::max))
+    }
+    fn square(self) -> I {
+        if self.0 >= 0.0 {
+            I(self.0 * self.0, self.1 * self.1)
+        } else if self.1 <= 0.0 {
+            I(self.1 * self.1, self.0 * self.0)
+        } else {
+            I(0.0, (self.0 * self.0).max(self.1 * self.1))
+        }
+    }
+    fn add(self, o: I) -> I {
+        I(self.0 + o.0, self.1 + o.1)
+    }
+    fn mag(self) -> f64 {
+        self.0.abs().max(self.1.abs())
+    }
+}
+
+/// The largest absolute coordinate of the box on axis `j`.
+fn magnitude(bx: &Aabb, j: usize) -> f64 {
+    bx.min[j].abs().max(bx.max[j].abs())
+}
+
+fn finite_or_zero(x: f64) -> f64 {
+    if x.is_finite() {
+        x
+    } else {
+        0.0
+    }
+}
+
+/// Narrows the box with `n·(x - o) + d <= 0`: on axis `i`,
+/// `nᵢ (xᵢ - oᵢ) <= -d - Σ_{j≠i} nⱼ (xⱼ - oⱼ)`.
+fn narrow_half_space(bx: &mut Aabb, h: &quadric::HalfSpace) {
+    let n = *h.normal_vector();
+    let o = h.reference_point();
+    let d = h.value(&o);
+    for i in 0..3 {
+        if n[i] == 0.0 {
+            continue;
+        }
+        let mut rest = I(d, d);
+        let mut mag = d.abs();
+        for j in (0..3).filter(|&j| j != i) {
+            let term = I(bx.min[j] - o[j], bx.max[j] - o[j]).scale(n[j]);
+            mag += term.0.abs();
+            rest = rest.add(term);
+        }
+        // The smallest the rest can be; -∞ means no information.
+        let lo = rest.0;
+        if !lo.is_finite() {
+            continue;
+        }
+        let bound = -lo / n[i];
+        let local = mag / n[i].abs();
+        // The differences xⱼ - oⱼ round relative to the absolute coordinates.
+        // (An infinite side left the bound alone above, or has a zero coefficient.)
+        let abs =
+            (0..3).map(|j| finite_or_zero(n[j].abs() * (o[j].abs() + magnitude(bx, j)))).sum::<f64>() / n[i].abs();
+        if n[i] > 0.0 {
+            let b = widen_up(o[i] + bound, local, abs);
+            if b < bx.max[i] {
+                bx.max[i] = b;
+            }
+        } else {
+            let b = widen_down(o[i] + bound, local, abs);
+            if b > bx.min[i] {
+                bx.min[i] = b;
+            }
+        }
+    }
+}
+
+/// Narrows the box with `f(x) <= 0`, written on axis `i` as
+/// `a dᵢ² + 2 B dᵢ + C <= 0` (`d = x - c`) with `B` and `C` intervals over the
+/// other axes. A feasible `dᵢ` satisfies `a dᵢ² + 2 B' dᵢ + C_lo <= 0` for `B'`
+/// one of `B`'s ends, so it lies in the hull of those two root intervals.
+fn narrow_quadric(bx: &mut Aabb, q: &quadric::Quadric) {
+    let (c, a, w, k) = q.local_parts();
+    for i in 0..3 {
+        let others: [usize; 2] = match i {
+            0 => [1, 2],
+            1 => [0, 2],
+            _ => [0, 1],
+        };
+        let dj = |j: usize| I(bx.min[j] - c[j], bx.max[j] - c[j]);
+        let mut b = I(w[i], w[i]);
+        let mut cc = I(k, k);
+        // Sum of the magnitudes behind C's lower end: its rounding scale.
+        let mut cmag = k.abs();
+        let mut add_c = |cc: &mut I, term: I| {
+            cmag += term.0.abs();
+            *cc = cc.add(term);
+        };
+        for &j in &others {
+            b = b.add(dj(j).scale(a[(i, j)]));
+            add_c(&mut cc, dj(j).square().scale(a[(j, j)]));
+            add_c(&mut cc, dj(j).scale(2.0 * w[j]));
+        }
+        add_c(&mut cc, dj(others[0]).mul(dj(others[1])).scale(2.0 * a[(others[0], others[1])]));
+        let (blo, bhi, clo) = (b.0, b.1, cc.0);
+        if !(blo.is_finite() && bhi.is_finite() && clo.is_finite()) {
+            continue;
+        }
+        let aii = a[(i, i)];
+        // The magnitude the bound was computed from, for the rounding margin.
+        let (lo, hi, scale) = if aii > 0.0 {
+            let roots = |bb: f64| {
+                let disc = bb * bb - aii * clo;
+                (disc >= 0.0).then(|| {
+                    let s = disc.sqrt();
+                    ((-bb - s) / aii, (-bb + s) / aii)
+                })
+            };
+            let scale = (b.mag() + (aii * cmag).sqrt()) / aii;
+            match (roots(blo), roots(bhi)) {
+                (None, None) => {
+                    // Only claim emptiness when it is not a rounding artefact.
+                    let margin = 1e-9 * (blo * blo + bhi * bhi + (aii * clo).abs());
+                    if blo * blo - aii * clo < -margin && bhi * bhi - aii * clo < -margin {
+                        *bx = Aabb::EMPTY;
+                        return;
+                    }
+                    continue;
+                }
+                (Some(r), None) | (None, Some(r)) => (r.0, r.1, scale),
+                (Some(r), Some(s)) => (r.0.min(s.0), r.1.max(s.1), scale),
+            }
+        } else if aii == 0.0 && blo > 0.0 {
+            // 2B dᵢ + C_lo <= 0 for some B in [blo, bhi]: dᵢ <= max_B(-C_lo / 2B).
+            (f64::NEG_INFINITY, (-clo / (2.0 * blo)).max(-clo / (2.0 * bhi)), cmag / blo)
+        } else if aii == 0.0 && bhi < 0.0 {
+            ((-clo / (2.0 * blo)).min(-clo / (2.0 * bhi)), f64::INFINITY, cmag / -bhi)
+        } else {
+            continue;
+        };
+        // The differences xⱼ - cⱼ round relative to the absolute coordinates.
+        let abs =
+            c[i].abs() + others.iter().map(|&j| finite_or_zero(c[j].abs() + magnitude(bx, j))).fold(0.0, f64::max);
+        let lo = widen_down(c[i] + lo, scale, abs);
+        let hi = widen_up(c[i] + hi, scale, abs);
+        if lo > bx.min[i] {
+            bx.min[i] = lo;
+        }
+        if hi < bx.max[i] {
+            bx.max[i] = hi;
+        }
+        if bx.min[i] > bx.max[i] {
+            *bx = Aabb::EMPTY;
+            return;
+        }
     }
 }

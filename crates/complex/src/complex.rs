@@ -1,16 +1,27 @@
 //! The complex: blocks in priority order and the queries on them.
 
+use core::cell::RefCell;
+
 use quadric::nalgebra::{Point3, Vector3};
 use quadric::{IntervalSet, Ray};
 
+use crate::bounds::block_box;
+use crate::bvh::{Bvh, RayBoxes};
 use crate::partition::{Event, Partition, Segment, Surface};
 use crate::{Aabb, Block, BlockId, ComplexError, Opacity};
+
+/// The default ε relative to the scene's size: `ε = DEFAULT_RELATIVE_EPSILON · D`
+/// with `D` the diagonal of the box around all bounded blocks (`D = 1` if
+/// there are none). Large enough to swallow the rounding error of a hit
+/// point (about `10⁻¹⁵ D` away from tangencies), small enough to be invisible.
+pub const DEFAULT_RELATIVE_EPSILON: f64 = 1e-9;
 
 /// Options for building a [`Complex`].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ComplexOptions {
-    /// Intervals contained in `[0, ε]` are no hit. `None`: `1e-9` times the
-    /// size of the bounded part of the scene (at least `1e-9`).
+    /// Intervals contained in `[0, ε]` are no hit. `None`: the default,
+    /// [`DEFAULT_RELATIVE_EPSILON`] times the diagonal of the bounded part of
+    /// the scene (or `1e-9` if nothing is bounded).
     pub epsilon: Option<f64>,
 }
 
@@ -32,29 +43,85 @@ pub struct Hit {
 }
 
 /// An immutable union of blocks in priority order, ready for queries.
+///
+/// ```
+/// use complex::{Block, Complex, ComplexOptions, MaterialKey, Opacity};
+/// use quadric::nalgebra::{Point3, Vector3};
+/// use quadric::{Quadric, Ray, Solid, Transform};
+/// let ball = |x: f64, opacity| {
+///     let m = Transform::translate(Vector3::new(x, 0.0, 0.0)).unwrap();
+///     Block::new("ball", vec![Solid::from(Quadric::sphere().transformed(&m))], opacity, MaterialKey(0)).unwrap()
+/// };
+/// let scene = Complex::new(vec![ball(0.0, Opacity::Transparent), ball(5.0, Opacity::Opaque)], ComplexOptions::default())
+///     .unwrap();
+/// let ray = Ray::new(Point3::new(-3.0, 0.0, 0.0), Vector3::x()).unwrap();
+/// let hit = scene.cast_ray(&ray, f64::INFINITY).unwrap();
+/// assert_eq!((hit.t, hit.entering, hit.block.0), (2.0, true, 0));
+/// let p = scene.partition(&ray);
+/// assert_eq!(p.events.iter().map(|e| e.t).collect::<Vec<_>>(), [2.0, 4.0, 7.0, 9.0]);
+/// assert_eq!(scene.contains_point(&Point3::new(5.0, 0.5, 0.0)).map(|b| b.0), Some(1));
+/// ```
 #[derive(Clone, Debug)]
 pub struct Complex {
     blocks: Vec<Block>,
     boxes: Vec<Aabb>,
+    /// Bounded, non-empty blocks.
+    bvh: Bvh,
+    /// Blocks with an infinite box: tested for every ray.
+    unbounded: Vec<u32>,
     epsilon: f64,
     any_transparent: bool,
 }
 
+/// Per-thread buffers `partition_into` reuses, so that after the first ray
+/// on a thread it allocates only if `out` must grow.
+#[derive(Default)]
+struct Scratch {
+    sets: Vec<(BlockId, IntervalSet)>,
+    cuts: Vec<f64>,
+}
+
+thread_local! {
+    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
+}
+
 impl Complex {
-    /// Builds the query structure. Blocks keep their order: earlier blocks
-    /// have priority (SPEC §3).
+    /// Builds the query structure: a tight box per block and a BVH over the
+    /// bounded ones. Blocks keep their order: earlier blocks have priority
+    /// (SPEC §3).
     pub fn new(blocks: Vec<Block>, options: ComplexOptions) -> Result<Self, ComplexError> {
         if blocks.len() >= u32::MAX as usize {
             return Err(ComplexError::TooManyBlocks { max: u32::MAX as usize - 1 });
         }
-        let boxes: Vec<Aabb> = blocks.iter().map(|_| Aabb::INFINITE).collect();
-        let epsilon = match options.epsilon {
-            Some(e) if !(e.is_finite() && e >= 0.0) => return Err(ComplexError::BadEpsilon(e)),
-            Some(e) => e,
-            None => 1e-9,
-        };
+        if let Some(e) = options.epsilon {
+            if !(e.is_finite() && e >= 0.0) {
+                return Err(ComplexError::BadEpsilon(e));
+            }
+        }
+        let boxes: Vec<Aabb> = blocks.iter().map(|b| block_box(b.solids())).collect();
+        let mut bounded = Vec::new();
+        let mut unbounded = Vec::new();
+        for (i, b) in boxes.iter().enumerate() {
+            if b.is_empty() {
+                continue; // provably empty: no ray can meet it
+            } else if b.is_bounded() {
+                bounded.push((i as u32, *b));
+            } else {
+                unbounded.push(i as u32);
+            }
+        }
+        let epsilon = options.epsilon.unwrap_or_else(|| {
+            let scene = bounded.iter().fold(Aabb::EMPTY, |a, (_, b)| a.union(b));
+            let diagonal = if scene.is_bounded() { (scene.max - scene.min).norm() } else { 0.0 };
+            if diagonal > 0.0 && diagonal.is_finite() {
+                DEFAULT_RELATIVE_EPSILON * diagonal
+            } else {
+                DEFAULT_RELATIVE_EPSILON
+            }
+        });
+        let bvh = Bvh::build(&bounded);
         let any_transparent = blocks.iter().any(Block::is_transparent);
-        Ok(Complex { blocks, boxes, epsilon, any_transparent })
+        Ok(Complex { blocks, boxes, bvh, unbounded, epsilon, any_transparent })
     }
 
     /// The blocks in priority order.
@@ -63,6 +130,9 @@ impl Complex {
     }
 
     /// The block with this id.
+    ///
+    /// # Panics
+    /// If `id` is not a block of this complex.
     pub fn block(&self, id: BlockId) -> &Block {
         &self.blocks[id.index()]
     }
@@ -77,7 +147,9 @@ impl Complex {
         self.any_transparent
     }
 
-    /// The box of one block (infinite where unbounded).
+    /// The box of one block: conservative (it holds every point of the
+    /// block), tight for bounded blocks, infinite on the axes where the block
+    /// is unbounded, [`Aabb::EMPTY`] for a block shown to be empty.
     pub fn block_aabb(&self, id: BlockId) -> Aabb {
         self.boxes[id.index()]
     }
@@ -95,46 +167,289 @@ impl Complex {
     /// The interval set of each block the ray meets, with intervals inside
     /// `[0, ε]` removed, in priority order.
     pub fn intervals(&self, ray: &Ray) -> Vec<(BlockId, IntervalSet)> {
-        (0..self.blocks.len())
-            .filter_map(|i| {
-                let id = BlockId(i as u32);
-                let set = self.without_epsilon(self.block_intervals(id, ray));
-                (!set.is_empty()).then_some((id, set))
-            })
-            .collect()
+        let mut out = Vec::new();
+        self.collect_sets(ray, f64::INFINITY, &mut out);
+        out
+    }
+
+    /// The non-empty sets (after the ε rule) of the blocks whose boxes the ray
+    /// crosses before `max_t`, sorted by block id.
+    fn collect_sets(&self, ray: &Ray, max_t: f64, out: &mut Vec<(BlockId, IntervalSet)>) {
+        out.clear();
+        let mut push = |i: u32| {
+            let set = self.without_epsilon(self.blocks[i as usize].intervals(ray));
+            if !set.is_empty() {
+                out.push((BlockId(i), set));
+            }
+        };
+        let rb = RayBoxes::new(ray);
+        let mut t_max = max_t;
+        self.bvh.traverse(&rb, 0.0, &mut t_max, |i, _, _| push(i));
+        for i in self.unbounded_crossed(&rb, 0.0, max_t) {
+            push(i);
+        }
+        out.sort_unstable_by_key(|(id, _)| *id);
+    }
+
+    /// The unbounded blocks whose boxes the ray crosses within `[t_min, t_max]`.
+    fn unbounded_crossed<'a>(&'a self, rb: &'a RayBoxes, t_min: f64, t_max: f64) -> impl Iterator<Item = u32> + 'a {
+        self.unbounded.iter().copied().filter(move |&i| {
+            let b = &self.boxes[i as usize];
+            rb.enter(&b.min.coords.into(), &b.max.coords.into(), t_min, t_max).is_some()
+        })
     }
 
     /// The ε rule (SPEC §3): an interval contained in `[0, ε]` is no hit.
+    #[inline]
     fn without_epsilon(&self, mut set: IntervalSet) -> IntervalSet {
         let eps = self.epsilon;
-        set.retain(|iv| iv.exit.t > eps);
+        if set.as_slice().first().is_some_and(|iv| iv.exit.t <= eps) {
+            set.retain(|iv| iv.exit.t > eps);
+        }
         set
     }
 
-    /// The block that owns `p` under the priority rule, if any.
+    /// The block that owns `p` under the priority rule, if any: the first
+    /// opaque block containing it, else the first transparent one.
     pub fn contains_point(&self, p: &Point3<f64>) -> Option<BlockId> {
-        owner_of(
-            self.blocks
-                .iter()
-                .enumerate()
-                .filter(|(_, b)| b.contains_point(p))
-                .map(|(i, b)| (BlockId(i as u32), b.opacity())),
-        )
+        if !p.iter().all(|c| c.is_finite()) {
+            return None;
+        }
+        let (mut opaque, mut transparent) = (u32::MAX, u32::MAX);
+        let mut consider = |i: u32| {
+            let b = &self.blocks[i as usize];
+            let best = if b.is_transparent() { &mut transparent } else { &mut opaque };
+            if i < *best && b.contains_point(p) {
+                *best = i;
+            }
+        };
+        self.bvh.visit_point(&[p.x, p.y, p.z], &mut consider);
+        for &i in &self.unbounded {
+            if self.boxes[i as usize].contains_point(p) {
+                consider(i);
+            }
+        }
+        [opaque, transparent].into_iter().find(|&i| i != u32::MAX).map(BlockId)
     }
 
-    /// The first event along the ray with `ε < t <= max_t`: the first change
-    /// of owner. Events within `ε` of the origin are skipped, so a ray leaving
-    /// a surface does not hit it again.
+    /// Whether an event is an interface a renderer sees: the medium changes
+    /// there. Events between two opaque blocks (inside opaque matter) and
+    /// between two transparent blocks of the same material are not.
+    pub fn is_visible(&self, event: &Event) -> bool {
+        let opaque = |o: Option<BlockId>| o.is_some_and(|id| !self.blocks[id.index()].is_transparent());
+        let inside_opaque = opaque(event.before) && opaque(event.after);
+        !(event.same_medium || inside_opaque)
+    }
+
+    /// The first surface along the ray with `ε < t <= max_t`: the first
+    /// visible event of [`Complex::partition`] (see [`Complex::is_visible`]).
+    /// Events within `ε` of the origin are skipped, so a ray leaving a
+    /// surface does not hit it again.
+    ///
+    /// Without transparent blocks this is the first point after `ε` where the
+    /// ray crosses the boundary of the union of the blocks: the nearest entry,
+    /// found front to back through the BVH with early exit, or, for a ray
+    /// that starts inside, the exit from the connected run of blocks it
+    /// starts in. No partition is built and nothing is allocated.
     pub fn cast_ray(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
-        let p = self.partition(ray);
-        p.events.iter().find(|e| e.t > self.epsilon).filter(|e| e.t <= max_t).map(|e| Hit {
-            t: e.t,
-            point: e.point,
-            normal: e.normal,
-            entering: e.entering,
-            block: e.surface.block,
-            solid: e.surface.solid,
+        // Also rejects a NaN `max_t`.
+        if max_t.partial_cmp(&self.epsilon) != Some(core::cmp::Ordering::Greater) {
+            return None;
+        }
+        if !self.any_transparent {
+            return self.cast_opaque(ray, max_t);
+        }
+        self.cast_general(ray, max_t)
+    }
+
+    /// `cast_ray` with transparent blocks: walks the ends of the blocks'
+    /// intervals in order from ε, keeping the owner, until the owner changes
+    /// visibly. Each step is one front-to-back BVH query for the next end
+    /// (with early exit) and one for the blocks covering the ray just after
+    /// it; nothing is stored, so nothing is allocated.
+    fn cast_general(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
+        let rb = RayBoxes::new(ray);
+        let mut tau = self.epsilon;
+        let mut before = self.owner_after(ray, &rb, tau);
+        loop {
+            let t = self.next_end(ray, &rb, tau, max_t)?;
+            let after = self.owner_after(ray, &rb, t);
+            if after != before {
+                if self.visible_change(before, after) {
+                    if let Some(hit) = self.event_hit(ray, t, before, after) {
+                        return Some(hit);
+                    }
+                }
+                before = after;
+            }
+            tau = t;
+        }
+    }
+
+    /// The owner of the ray just after `t`: the blocks with an interval
+    /// `enter <= t < exit`, by the priority rule.
+    fn owner_after(&self, ray: &Ray, rb: &RayBoxes, t: f64) -> Option<BlockId> {
+        let (mut opaque, mut transparent) = (u32::MAX, u32::MAX);
+        let mut consider = |i: u32| {
+            let b = &self.blocks[i as usize];
+            let best = if b.is_transparent() { &mut transparent } else { &mut opaque };
+            if i < *best && b.intervals(ray).iter().any(|iv| iv.enter.t <= t && t < iv.exit.t) {
+                *best = i;
+            }
+        };
+        let mut t_hi = t;
+        self.bvh.traverse(rb, t, &mut t_hi, |i, _, _| consider(i));
+        for i in self.unbounded_crossed(rb, t, t) {
+            consider(i);
+        }
+        [opaque, transparent].into_iter().find(|&i| i != u32::MAX).map(BlockId)
+    }
+
+    /// The smallest finite end of any block's interval in `(tau, max_t]`.
+    fn next_end(&self, ray: &Ray, rb: &RayBoxes, tau: f64, max_t: f64) -> Option<f64> {
+        let mut best: Option<f64> = None;
+        let mut consider = |i: u32, t_max: &mut f64| {
+            for iv in self.blocks[i as usize].intervals(ray).iter() {
+                for e in [iv.enter.t, iv.exit.t] {
+                    if e > tau && e <= *t_max && e.is_finite() && best.map_or(true, |b| e < b) {
+                        best = Some(e);
+                        *t_max = e;
+                    }
+                }
+            }
+        };
+        let mut t_max = max_t;
+        for i in self.unbounded_crossed(rb, tau, max_t) {
+            consider(i, &mut t_max);
+        }
+        self.bvh.traverse(rb, tau, &mut t_max, |i, _, t_max| consider(i, t_max));
+        best
+    }
+
+    /// Whether a change of owner from `before` to `after` is an interface
+    /// (see [`Complex::is_visible`]).
+    fn visible_change(&self, before: Option<BlockId>, after: Option<BlockId>) -> bool {
+        let (Some(b), Some(a)) = (before, after) else { return true };
+        let (b, a) = (&self.blocks[b.index()], &self.blocks[a.index()]);
+        match (b.is_transparent(), a.is_transparent()) {
+            (false, false) => false,
+            (true, true) => b.material() != a.material(),
+            _ => true,
+        }
+    }
+
+    /// The hit at a change of owner at `t`: the entry of the new owner if it
+    /// starts there, else the exit of the old one (as in the partition).
+    fn event_hit(&self, ray: &Ray, t: f64, before: Option<BlockId>, after: Option<BlockId>) -> Option<Hit> {
+        let entry = after.and_then(|id| {
+            let set = self.blocks[id.index()].intervals(ray);
+            let solid = set.iter().find(|iv| iv.enter.t == t)?.enter.solid()?;
+            Some(self.hit(ray, t, id.0, solid, true))
+        });
+        entry.or_else(|| {
+            let id = before?;
+            let set = self.blocks[id.index()].intervals(ray);
+            let solid = set.iter().find(|iv| iv.exit.t == t)?.exit.solid()?;
+            Some(self.hit(ray, t, id.0, solid, false))
         })
+    }
+
+    /// `cast_ray` for complexes of opaque blocks only.
+    fn cast_opaque(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
+        let eps = self.epsilon;
+        let rb = RayBoxes::new(ray);
+        // Is the ray inside the union just after ε? Then the answer is the end
+        // of the run of overlapping intervals it is in.
+        let mut run_end = eps;
+        let mut probe = |i: u32| {
+            for iv in self.blocks[i as usize].intervals(ray).iter() {
+                if iv.enter.t <= eps && eps < iv.exit.t {
+                    run_end = run_end.max(iv.exit.t);
+                }
+            }
+        };
+        let mut t_probe = eps;
+        self.bvh.traverse(&rb, eps, &mut t_probe, |i, _, _| probe(i));
+        for i in self.unbounded_crossed(&rb, eps, eps) {
+            probe(i);
+        }
+        if run_end > eps {
+            return self.run_exit(ray, &rb, run_end, max_t);
+        }
+        // Outside: the nearest entry after ε, lowest block id on ties (the
+        // owner after the event).
+        let mut best: Option<(f64, u32, u32)> = None;
+        let mut consider = |i: u32, t_max: &mut f64| {
+            let set = self.blocks[i as usize].intervals(ray);
+            if let Some(iv) = set.iter().find(|iv| iv.enter.t > eps) {
+                let t = iv.enter.t;
+                if t <= *t_max && best.map_or(true, |(bt, bi, _)| t < bt || (t == bt && i < bi)) {
+                    best = Some((t, i, iv.enter.solid));
+                    *t_max = t;
+                }
+            }
+        };
+        let mut t_max = max_t;
+        for i in self.unbounded_crossed(&rb, eps, max_t) {
+            consider(i, &mut t_max);
+        }
+        self.bvh.traverse(&rb, eps, &mut t_max, |i, _, t_max| consider(i, t_max));
+        let (t, block, solid) = best?;
+        Some(self.hit(ray, t, block, solid, true))
+    }
+
+    /// The exit from the run of overlapping intervals containing `(ε, run_end]`.
+    fn run_exit(&self, ray: &Ray, rb: &RayBoxes, mut run_end: f64, max_t: f64) -> Option<Hit> {
+        loop {
+            let mut next = run_end;
+            // The lowest block id whose interval ends exactly at `next`: the
+            // owner just before the exit.
+            let mut owner: Option<(u32, u32)> = None;
+            let mut extend = |i: u32| {
+                for iv in self.blocks[i as usize].intervals(ray).iter() {
+                    if iv.enter.t <= run_end && iv.exit.t >= next {
+                        if iv.exit.t > next {
+                            next = iv.exit.t;
+                            owner = None;
+                        }
+                        if owner.map_or(true, |(o, _)| i < o) {
+                            owner = Some((i, iv.exit.solid));
+                        }
+                    }
+                }
+            };
+            let mut t_hi = run_end;
+            self.bvh.traverse(rb, self.epsilon, &mut t_hi, |i, _, _| extend(i));
+            for i in self.unbounded_crossed(rb, self.epsilon, run_end) {
+                extend(i);
+            }
+            if next > run_end {
+                if next > max_t {
+                    return None;
+                }
+                run_end = next;
+                continue;
+            }
+            let (block, solid) = owner?;
+            if !(run_end.is_finite() && run_end <= max_t) {
+                return None;
+            }
+            return Some(self.hit(ray, run_end, block, solid, false));
+        }
+    }
+
+    fn hit(&self, ray: &Ray, t: f64, block: u32, solid: u32, entering: bool) -> Hit {
+        let point = ray.at(t);
+        let normal = self.normal(BlockId(block), solid, &point);
+        Hit { t, point, normal, entering, block: BlockId(block), solid }
+    }
+
+    fn normal(&self, block: BlockId, solid: u32, point: &Point3<f64>) -> Vector3<f64> {
+        self.blocks[block.index()]
+            .solids()
+            .get(solid as usize)
+            .and_then(|s| s.normal(point))
+            .unwrap_or_else(Vector3::zeros)
     }
 
     /// The partition of the ray into owned segments with the events between them.
@@ -144,34 +459,57 @@ impl Complex {
         out
     }
 
-    /// Like [`Complex::partition`], reusing `out`'s allocations.
+    /// Like [`Complex::partition`], reusing `out`'s allocations (and
+    /// per-thread scratch buffers): only blocks whose boxes the ray crosses
+    /// are visited.
     pub fn partition_into(&self, ray: &Ray, out: &mut Partition) {
+        SCRATCH.with(|s| match s.try_borrow_mut() {
+            Ok(mut s) => {
+                let Scratch { sets, cuts } = &mut *s;
+                self.partition_core(ray, sets, cuts, out);
+            }
+            Err(_) => self.partition_core(ray, &mut Vec::new(), &mut Vec::new(), out),
+        });
+    }
+
+    /// The partition, with caller-provided buffers for the sets and cuts.
+    fn partition_core(
+        &self,
+        ray: &Ray,
+        sets: &mut Vec<(BlockId, IntervalSet)>,
+        cuts: &mut Vec<f64>,
+        out: &mut Partition,
+    ) {
         out.clear();
-        let sets = self.intervals(ray);
-        let mut cuts: Vec<f64> = vec![0.0];
-        for (_, s) in &sets {
+        self.collect_sets(ray, f64::INFINITY, sets);
+        cuts.clear();
+        cuts.push(0.0);
+        for (_, s) in sets.iter() {
             for iv in s.iter() {
                 cuts.extend([iv.enter.t, iv.exit.t].into_iter().filter(|t| *t > 0.0 && t.is_finite()));
             }
         }
-        cuts.sort_by(f64::total_cmp);
+        cuts.sort_unstable_by(f64::total_cmp);
         cuts.dedup();
         cuts.push(f64::INFINITY);
         for w in cuts.windows(2) {
             let (a, b) = (w[0], w[1]);
-            let mid = if b.is_finite() { 0.5 * (a + b) } else { a + 1.0 };
+            // No end lies strictly inside (a, b), so each interval covers all
+            // of it or none. (A midpoint test would fail between adjacent floats.)
             let owner = owner_of(
-                sets.iter().filter(|(_, s)| s.contains(mid)).map(|(id, _)| (*id, self.blocks[id.index()].opacity())),
+                sets.iter()
+                    .filter(|(_, s)| s.iter().any(|iv| iv.enter.t <= a && b <= iv.exit.t))
+                    .map(|(id, _)| (*id, self.blocks[id.index()].opacity())),
             );
             match out.segments.last_mut() {
                 Some(last) if last.owner == owner => last.end = b,
                 _ => out.segments.push(Segment { start: a, end: b, owner }),
             }
         }
+        let set_of = |id: BlockId| sets.binary_search_by_key(&id, |(i, _)| *i).ok().map(|k| &sets[k].1);
         for w in out.segments.windows(2) {
             let (s0, s1) = (w[0], w[1]);
             let t = s1.start;
-            let set_of = |id: BlockId| sets.iter().find(|(i, _)| *i == id).map(|(_, s)| *s);
             // Prefer the entry of the new owner; else the exit of the old one.
             let entry = s1.owner.and_then(|id| {
                 set_of(id)?
@@ -191,15 +529,11 @@ impl Complex {
             };
             let Some((block, solid, entering)) = entry.or_else(exit) else { continue };
             let point = ray.at(t);
-            let normal =
-                self.blocks[block.index()].solids()[solid as usize].normal(&point).unwrap_or_else(Vector3::zeros);
+            let normal = self.normal(block, solid, &point);
             let medium = |o: Option<BlockId>| {
                 o.map(|id| &self.blocks[id.index()]).filter(|b| b.is_transparent()).map(|b| b.material())
             };
-            let same_medium = match (s0.owner, s1.owner) {
-                (Some(_), Some(_)) => medium(s0.owner).is_some() && medium(s0.owner) == medium(s1.owner),
-                _ => false,
-            };
+            let same_medium = medium(s0.owner).is_some() && medium(s0.owner) == medium(s1.owner);
             out.events.push(Event {
                 t,
                 point,

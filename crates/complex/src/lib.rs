@@ -5,16 +5,19 @@
 //! first hit with its surface ([`Complex::cast_ray`]), the partition of the
 //! ray into segments owned by blocks under the priority rule
 //! ([`Complex::partition`]) and point membership ([`Complex::contains_point`]).
+//! Each block gets a tight, conservative box; a BVH over the bounded blocks
+//! keeps queries fast for large scenes. See `docs/complex.md`.
 #![deny(missing_docs)]
 
 mod block;
 mod bounds;
+mod bvh;
 mod complex;
 mod error;
 mod partition;
 
 pub use block::{Block, BlockId, MaterialKey, Opacity};
 pub use bounds::Aabb;
-pub use complex::{Complex, ComplexOptions, Hit};
+pub use complex::{Complex, ComplexOptions, Hit, DEFAULT_RELATIVE_EPSILON};
 pub use error::ComplexError;
 pub use partition::{Event, Partition, Segment, Surface};

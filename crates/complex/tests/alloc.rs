@@ -1,0 +1,52 @@
+//! `cast_ray` never allocates, with or without transparent blocks.
+
+use complex::{Block, Complex, ComplexOptions, MaterialKey, Opacity};
+use proptest::prelude::*;
+use proptest::strategy::ValueTree;
+use proptest::test_runner::TestRunner;
+use quadric::{strategies, Quadric, Ray, Solid};
+
+use crate::common::*;
+
+fn scene(transparent_every: usize) -> (Complex, Vec<Ray>) {
+    let mut runner = TestRunner::deterministic();
+    let mut blocks = Vec::new();
+    for i in 0..300 {
+        let m = strategies::transform().new_tree(&mut runner).expect("tree").current();
+        let m = quadric::Transform::scale(0.2).expect("finite").then(&m);
+        let mut solids = vec![Solid::from(Quadric::sphere().transformed(&m))];
+        if i % 3 == 0 {
+            solids.push(hs(0.0, 1.0, 0.0, 0.0).transformed(&m));
+        }
+        let opacity =
+            if transparent_every > 0 && i % transparent_every == 0 { Opacity::Transparent } else { Opacity::Opaque };
+        blocks.push(Block::new("b", solids, opacity, MaterialKey(i as u32 % 3)).expect("valid"));
+    }
+    // An unbounded block too, so that list is exercised.
+    blocks.push(Block::new("floor", vec![hs(0.0, 1.0, 0.0, 6.0)], Opacity::Opaque, MaterialKey(9)).expect("valid"));
+    let rays = (0..500).map(|_| strategies::ray(5.0).new_tree(&mut runner).expect("tree").current()).collect();
+    (Complex::new(blocks, ComplexOptions::default()).expect("valid"), rays)
+}
+
+fn hits(c: &Complex, rays: &[Ray]) -> usize {
+    rays.iter().filter(|r| c.cast_ray(r, f64::INFINITY).is_some()).count()
+}
+
+#[test]
+fn the_counter_sees_allocations() {
+    let info = allocation_counter::measure(|| {
+        std::hint::black_box(vec![1u8; 16]);
+    });
+    assert!(info.count_total >= 1, "the counting allocator is not installed");
+}
+
+#[test]
+fn cast_ray_does_not_allocate() {
+    for transparent_every in [0, 4] {
+        let (c, rays) = scene(transparent_every);
+        let mut n = 0;
+        let info = allocation_counter::measure(|| n = hits(&c, &rays));
+        assert!(n > 50, "the scene should be hit often, got {n}");
+        assert_eq!(info.count_total, 0, "cast_ray allocated (transparent every {transparent_every})");
+    }
+}

@@ -1,0 +1,194 @@
+//! Block boxes: tight for the named shapes, conservative always.
+
+use complex::{Aabb, Block, MaterialKey, Opacity};
+use proptest::prelude::*;
+use quadric::nalgebra::{Point3, Vector3};
+use quadric::{strategies, Quadric, Ray, Solid, Transform};
+
+use crate::common::*;
+
+fn box_of(solids: Vec<Solid>) -> Aabb {
+    complex(vec![block("b", solids, O, 0)]).block_aabb(complex::BlockId(0))
+}
+
+/// The block's box equals `[min, max]` within a small relative tolerance.
+fn check(solids: Vec<Solid>, min: [f64; 3], max: [f64; 3]) {
+    let b = box_of(solids);
+    let size = (0..3).map(|i| max[i] - min[i]).fold(0.0f64, f64::max);
+    let tol = 1e-6 * (size + 1.0);
+    for i in 0..3 {
+        assert!((b.min[i] - min[i]).abs() <= tol && (b.max[i] - max[i]).abs() <= tol, "{b:?} vs {min:?} {max:?}");
+    }
+}
+
+fn rot_z(deg: f64) -> Transform {
+    Transform::rotate_z_degrees(deg).expect("finite")
+}
+
+#[test]
+fn ellipsoid_box_from_the_inverse() {
+    check(vec![Solid::from(Quadric::sphere())], [-1.0; 3], [1.0; 3]);
+    let m = Transform::scale_xyz(Vector3::new(2.0, 1.0, 0.5))
+        .expect("finite")
+        .then(&rot_z(30.0))
+        .then(&translate(10.0, -5.0, 3.0));
+    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    let hx = ((2.0 * c).powi(2) + s.powi(2)).sqrt();
+    let hy = ((2.0 * s).powi(2) + c.powi(2)).sqrt();
+    check(
+        vec![Solid::from(Quadric::sphere().transformed(&m))],
+        [10.0 - hx, -5.0 - hy, 2.5],
+        [10.0 + hx, -5.0 + hy, 3.5],
+    );
+}
+
+#[test]
+fn capped_tubes_straight_and_tilted() {
+    check(post(0.0, 0.0, 1.0, -1.0, 2.0), [-1.0, -1.0, -1.0], [1.0, 2.0, 1.0]);
+    // A tube capped at y = ±1, tilted by 30° about z: axis u = (-sin, cos, 0).
+    let tilted = moved(&post(0.0, 0.0, 1.0, -1.0, 1.0), &rot_z(30.0));
+    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    let (hx, hy) = (s + c, c + s);
+    check(tilted, [-hx, -hy, -1.0], [hx, hy, 1.0]);
+}
+
+#[test]
+fn cone_nappe_cut_by_planes() {
+    let nappe = vec![Solid::from(Quadric::cone()), hs(0.0, -1.0, 0.0, 1.0), hs(0.0, 1.0, 0.0, -2.0)];
+    check(nappe.clone(), [-2.0, 1.0, -2.0], [2.0, 2.0, 2.0]);
+    // Tilted by 30° about z: the frustum's box is that of its two end discs
+    // (radius s at axis parameter s = 1, 2; axis u = (-sin, cos, 0)).
+    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    check(moved(&nappe, &rot_z(30.0)), [-2.0 * (s + c), c - s, -2.0], [2.0 * (c - s), 2.0 * (c + s), 2.0]);
+}
+
+#[test]
+fn hyperboloid_capped() {
+    let waist = vec![Solid::from(Quadric::hyperboloid_one_sheet()), hs(0.0, -1.0, 0.0, -1.0), hs(0.0, 1.0, 0.0, -2.0)];
+    let r = 5f64.sqrt();
+    check(waist.clone(), [-r, -1.0, -r], [r, 2.0, r]);
+    // Moved far away and turned: still bounded, same size.
+    let m = rot_z(90.0).then(&translate(1e4, -2e4, 3e4));
+    check(moved(&waist, &m), [1e4 - 2.0, -2e4 - r, 3e4 - r], [1e4 + 1.0, -2e4 + r, 3e4 + r]);
+}
+
+#[test]
+fn paraboloid_capped() {
+    check(vec![Solid::from(Quadric::paraboloid()), hs(0.0, 1.0, 0.0, -4.0)], [-2.0, 0.0, -2.0], [2.0, 4.0, 2.0]);
+}
+
+#[test]
+fn boxes_of_half_spaces_straight_and_rotated() {
+    check(cuboid([-1.0, 2.0, 3.0], [4.0, 5.0, 6.0]), [-1.0, 2.0, 3.0], [4.0, 5.0, 6.0]);
+    let r = 2f64.sqrt();
+    check(moved(&cuboid([-1.0; 3], [1.0; 3]), &rot_z(45.0)), [-r, -r, -1.0], [r, r, 1.0]);
+    // A ball cut by a half-space: the half-ball.
+    check(vec![Solid::from(Quadric::sphere()), hs(0.0, -1.0, 0.0, 0.0)], [-1.0, 0.0, -1.0], [1.0, 1.0, 1.0]);
+}
+
+#[test]
+fn unbounded_and_empty_blocks() {
+    let tube = box_of(vec![Solid::from(Quadric::tube_y())]);
+    assert!(!tube.is_bounded());
+    assert!(tube.min.y == f64::NEG_INFINITY && tube.max.y == f64::INFINITY);
+    assert!((tube.max.x - 1.0).abs() < 1e-6 && (tube.min.z + 1.0).abs() < 1e-6, "{tube:?}");
+    assert_eq!(box_of(vec![hs(1.0, 1.0, 0.0, 0.0)]), Aabb::INFINITE);
+    // Disjoint half-spaces: provably empty, and no ray meets the block.
+    let empty = vec![hs(1.0, 0.0, 0.0, 0.0), hs(-1.0, 0.0, 0.0, 1.0)];
+    assert!(box_of(empty.clone()).is_empty());
+    let c = complex(vec![block("e", empty, O, 0)]);
+    assert!(c.cast_ray(&ray([-5.0, 0.0, 0.0], [1.0, 0.0, 0.0]), f64::INFINITY).is_none());
+    // An unbounded block is still hit: the half-space x <= 0 seen from +x.
+    let c = complex(vec![block("h", vec![hs(1.0, 0.0, 0.0, 0.0)], O, 0)]);
+    assert_eq!(c.cast_ray(&ray([3.0, 1.0, 2.0], [-1.0, 0.0, 0.0]), f64::INFINITY).map(|h| h.t), Some(3.0));
+}
+
+/// A bounded base shape (ball, capped tube, cone nappe, cube, capped
+/// paraboloid) under a random transform, with up to two random solids more.
+fn bounded_block() -> impl Strategy<Value = Vec<Solid>> {
+    let base = prop_oneof![
+        Just(vec![Solid::from(Quadric::sphere())]),
+        Just(post(0.0, 0.0, 1.0, -1.0, 1.0)),
+        Just(vec![Solid::from(Quadric::cone()), hs(0.0, -1.0, 0.0, 0.5), hs(0.0, 1.0, 0.0, -2.0)]),
+        Just(cuboid([-1.0; 3], [1.0; 3])),
+        Just(vec![Solid::from(Quadric::paraboloid()), hs(0.0, 1.0, 0.0, -2.0)]),
+        Just(vec![Solid::from(Quadric::hyperboloid_one_sheet()), hs(0.0, -1.0, 0.0, -1.0), hs(0.0, 1.0, 0.0, -2.0)]),
+        Just(vec![Solid::from(Quadric::hyperboloid_two_sheets()), hs(0.0, -1.0, 0.0, -0.5), hs(0.0, 1.0, 0.0, -2.0)]),
+        Just(vec![Solid::from(Quadric::cone()), hs(0.3, 1.0, 0.0, 1.0), hs(0.0, 1.0, 0.2, -2.0)]),
+    ];
+    (base, strategies::transform(), proptest::collection::vec(strategies::solid(), 0..=2)).prop_map(
+        |(base, m, extra)| {
+            let mut s = moved(&base, &m);
+            s.extend(extra);
+            s
+        },
+    )
+}
+
+proptest! {
+    /// Every point of a block lies in its box: points sampled along random
+    /// rays through the block's intervals and in a cube around it.
+    #[test]
+    fn boxes_are_conservative(
+        solids in prop_oneof![3 => bounded_block(), 1 => proptest::collection::vec(strategies::solid(), 1..=3)],
+        rays in proptest::collection::vec(strategies::ray(4.0), 8),
+        points in proptest::collection::vec(strategies::point(6.0), 64),
+        unit in proptest::collection::vec((0.0f64..1.0, 0.0f64..1.0, 0.0f64..core::f64::consts::TAU), 16),
+    ) {
+        let b = Block::new("b", solids.clone(), Opacity::Opaque, MaterialKey(0)).expect("valid");
+        let bx = box_of(solids);
+        let inside = |p: &Point3<f64>| b.solids().iter().all(|s| s.contains_point(p));
+        let mut samples = points;
+        for r in &rays {
+            // Aim some rays at the block's box centre, so that they meet it.
+            let aimed = if bx.is_bounded() {
+                let centre = Point3::from((bx.min.coords + bx.max.coords) * 0.5);
+                Ray::new(r.origin(), centre - r.origin()).ok()
+            } else {
+                None
+            };
+            for r in [Some(*r), aimed].into_iter().flatten() {
+                for iv in b.intervals(&r).iter() {
+                    let (a, z) = (iv.enter.t, iv.exit.t.min(iv.enter.t + 100.0));
+                    for f in [0.0, 1e-9, 0.25, 0.5, 0.75, 1.0 - 1e-9, 1.0] {
+                        samples.push(r.at(a + f * (z - a)));
+                    }
+                }
+            }
+        }
+        // Rays in planes just outside each face of a bounded box, in the
+        // plane's directions: a block point found on them is outside the
+        // box. This probes the block's extreme points, which random points
+        // almost never reach.
+        if bx.is_bounded() {
+            for i in 0..3 {
+                let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+                let w = |a: usize| bx.max[a] - bx.min[a];
+                for (side, offset) in [(0, 1e-7), (1, 1e-7), (0, 1e-4), (1, 1e-4), (0, 1e-2), (1, 1e-2)] {
+                    let plane = if side == 0 { bx.min[i] - offset * w(i) } else { bx.max[i] + offset * w(i) };
+                    for &(u, v, angle) in &unit {
+                        let mut o = Point3::origin();
+                        o[i] = plane;
+                        o[j] = bx.min[j] + (1.2 * u - 0.1) * w(j);
+                        o[k] = bx.min[k] + (1.2 * v - 0.1) * w(k);
+                        let mut d = Vector3::zeros();
+                        d[j] = angle.cos();
+                        d[k] = angle.sin();
+                        let Ok(r) = Ray::new(o, d) else { continue };
+                        for r in [r, r.reversed_at(0.0)] {
+                            for iv in b.intervals(&r).iter() {
+                                let (a, z) = (iv.enter.t, iv.exit.t.min(iv.enter.t + 100.0));
+                                for f in [0.0, 0.5, 1.0] {
+                                    samples.push(r.at(a + f * (z - a)));
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        for p in samples.iter().filter(|p| inside(p)) {
+            prop_assert!(bx.contains_point(p), "{p:?} of the block is outside its box {bx:?}");
+        }
+    }
+}

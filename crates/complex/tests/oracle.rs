@@ -1,0 +1,278 @@
+//! Oracle property tests: random complexes and rays, checked against point
+//! membership sampled along the ray (from `Solid::value` alone) and against
+//! a brute-force partition over every block.
+
+use complex::{Block, BlockId, Complex, ComplexOptions, MaterialKey, Opacity};
+use proptest::prelude::*;
+use quadric::nalgebra::{Point3, Vector3};
+use quadric::{strategies, IntervalSet, Quadric, Ray, Solid};
+
+/// One block: solids, transparent?, material.
+type Spec = (Vec<Solid>, bool, u32);
+
+/// Solids flipped where needed so that each contains the origin.
+fn through_origin(solids: Vec<Solid>) -> Vec<Solid> {
+    let o = Point3::origin();
+    solids.into_iter().map(|s| if s.value(&o) > 0.0 { s.complement() } else { s }).collect()
+}
+
+fn spec() -> impl Strategy<Value = Spec> {
+    let ball = (strategies::transform(), 0.5f64..2.0).prop_map(|(m, r)| {
+        Solid::from(Quadric::sphere().transformed(&quadric::Transform::scale(r).expect("finite").then(&m)))
+    });
+    (
+        proptest::option::weighted(0.5, ball),
+        proptest::collection::vec(strategies::solid(), 1..=3),
+        any::<bool>(),
+        0u32..2,
+    )
+        .prop_map(|(ball, mut solids, transparent, material)| {
+            if let Some(b) = ball {
+                solids.insert(0, b);
+            }
+            (solids, transparent, material)
+        })
+}
+
+/// 3 to 8 blocks, the first three all containing the origin (so at least
+/// three overlap there), in shuffled priority.
+fn complex_spec() -> impl Strategy<Value = Vec<Spec>> {
+    (proptest::collection::vec(spec(), 3..=8), any::<proptest::sample::Index>()).prop_map(|(mut specs, rot)| {
+        for s in specs.iter_mut().take(3) {
+            s.0 = through_origin(core::mem::take(&mut s.0));
+        }
+        let k = rot.index(specs.len());
+        specs.rotate_left(k);
+        specs
+    })
+}
+
+/// Rays from anywhere in `[-4, 4]³`, half of them aimed near the origin.
+fn ray_spec() -> impl Strategy<Value = Ray> {
+    (strategies::ray(4.0), strategies::point(0.5), any::<bool>()).prop_map(|(r, target, aim)| {
+        if aim {
+            Ray::new(r.origin(), target - r.origin()).unwrap_or(r)
+        } else {
+            r
+        }
+    })
+}
+
+fn build(specs: &[Spec]) -> Complex {
+    let blocks = specs
+        .iter()
+        .enumerate()
+        .map(|(i, (solids, t, m))| {
+            let opacity = if *t { Opacity::Transparent } else { Opacity::Opaque };
+            Block::new(format!("b{i}"), solids.clone(), opacity, MaterialKey(*m)).expect("valid block")
+        })
+        .collect();
+    Complex::new(blocks, ComplexOptions::default()).expect("valid complex")
+}
+
+/// The owner by SPEC §3, from membership flags in priority order.
+fn oracle_owner(inside: &[bool], transparent: &[bool]) -> Option<BlockId> {
+    let pick = |want_transparent: bool| {
+        (0..inside.len()).find(|&i| inside[i] && transparent[i] == want_transparent).map(|i| BlockId(i as u32))
+    };
+    pick(false).or_else(|| pick(true))
+}
+
+/// Whether `t` is safely away from every solid's surface along the ray: all
+/// solids keep a non-zero sign on `[t - δ, t + δ]`.
+fn away_from_surfaces(c: &Complex, ray: &Ray, t: f64) -> bool {
+    let d = 1e-6 * (1.0 + t);
+    c.blocks().iter().flat_map(|b| b.solids()).all(|s| {
+        let v = [s.value(&ray.at(t - d)), s.value(&ray.at(t)), s.value(&ray.at(t + d))];
+        v.iter().all(|x| *x > 0.0) || v.iter().all(|x| *x < 0.0)
+    })
+}
+
+/// A brute-force partition: every block's set (no BVH, no boxes), the ε rule,
+/// and the owner of each piece between consecutive ends. Returns the change
+/// points `(t, before, after)`.
+fn brute_events(c: &Complex, ray: &Ray) -> Vec<(f64, Option<BlockId>, Option<BlockId>)> {
+    let eps = c.epsilon();
+    let sets: Vec<IntervalSet> = (0..c.blocks().len())
+        .map(|i| {
+            let mut s = c.block_intervals(BlockId(i as u32), ray);
+            s.retain(|iv| iv.exit.t > eps);
+            s
+        })
+        .collect();
+    let transparent: Vec<bool> = c.blocks().iter().map(Block::is_transparent).collect();
+    let mut ends: Vec<f64> = sets
+        .iter()
+        .flat_map(|s| s.iter().flat_map(|iv| [iv.enter.t, iv.exit.t]))
+        .filter(|t| t.is_finite() && *t > 0.0)
+        .collect();
+    ends.sort_by(f64::total_cmp);
+    ends.dedup();
+    // The owner of the piece (a, b) between consecutive ends: every
+    // interval covers all of it or none of it.
+    let owner_of = |a: f64, b: f64| {
+        let inside: Vec<bool> = sets.iter().map(|s| s.iter().any(|iv| iv.enter.t <= a && b <= iv.exit.t)).collect();
+        oracle_owner(&inside, &transparent)
+    };
+    let mut out = Vec::new();
+    let mut prev = owner_of(0.0, ends.first().copied().unwrap_or(f64::INFINITY));
+    for (k, &t) in ends.iter().enumerate() {
+        let o = owner_of(t, ends.get(k + 1).copied().unwrap_or(f64::INFINITY));
+        if o != prev {
+            out.push((t, prev, o));
+            prev = o;
+        }
+    }
+    out
+}
+
+fn visible(c: &Complex, before: Option<BlockId>, after: Option<BlockId>) -> bool {
+    let b = |o: Option<BlockId>| o.map(|id| c.block(id));
+    match (b(before), b(after)) {
+        (Some(x), Some(y)) if !x.is_transparent() && !y.is_transparent() => false,
+        (Some(x), Some(y)) => !(x.is_transparent() && y.is_transparent() && x.material() == y.material()),
+        _ => true,
+    }
+}
+
+proptest! {
+    #[test]
+    fn partitions_and_hits_agree_with_point_membership(
+        specs in complex_spec(),
+        rays in proptest::collection::vec(ray_spec(), 6),
+    ) {
+        let c = build(&specs);
+        let eps = c.epsilon();
+        let transparent: Vec<bool> = c.blocks().iter().map(Block::is_transparent).collect();
+        for ray in &rays {
+            let sets = c.intervals(ray);
+            let p = c.partition(ray);
+
+            // Structure: sets normalised; segments cover [0, ∞) in order;
+            // one event between each two segments, on a surface of one side.
+            for (_, s) in &sets {
+                prop_assert!(s.is_normalised());
+            }
+            prop_assert_eq!(p.segments.first().map(|s| s.start), Some(0.0));
+            prop_assert_eq!(p.segments.last().map(|s| s.end), Some(f64::INFINITY));
+            prop_assert_eq!(p.events.len() + 1, p.segments.len());
+            for (k, e) in p.events.iter().enumerate() {
+                let (s0, s1) = (p.segments[k], p.segments[k + 1]);
+                prop_assert!(s0.end == s1.start && s1.start == e.t && s0.owner != s1.owner);
+                prop_assert!(e.before == s0.owner && e.after == s1.owner);
+                let side = if e.entering { e.after } else { e.before };
+                prop_assert_eq!(Some(e.surface.block), side);
+                prop_assert!(e.t.is_finite() && e.point.iter().all(|x| x.is_finite()));
+                let n = e.normal.norm();
+                prop_assert!(n == 0.0 || (n - 1.0).abs() < 1e-9);
+            }
+
+            // Brute force over every block gives the same events.
+            let brute = brute_events(&c, ray);
+            let events: Vec<_> = p.events.iter().map(|e| (e.t, e.before, e.after)).collect();
+            prop_assert_eq!(&events, &brute);
+
+            // cast_ray is the first visible event after ε, BVH or not.
+            let first = brute.iter().find(|(t, b, a)| *t > eps && visible(&c, *b, *a)).map(|x| x.0);
+            let hit = c.cast_ray(ray, f64::INFINITY);
+            prop_assert_eq!(hit.map(|h| h.t), first);
+            if let Some(h) = hit {
+                let e = p.events.iter().find(|e| e.t == h.t).expect("the hit is an event");
+                prop_assert!(c.is_visible(e));
+                prop_assert_eq!((h.block, h.solid, h.entering), (e.surface.block, e.surface.solid, e.entering));
+                prop_assert!(c.cast_ray(ray, 0.5 * h.t).is_none() || 0.5 * h.t > h.t);
+                prop_assert_eq!(c.cast_ray(ray, h.t).map(|x| x.t), Some(h.t));
+            }
+
+            // Sampled membership: per-block sets, partition owner, contains_point.
+            let horizon = brute.last().map_or(10.0, |e| e.0 + 2.0).min(60.0);
+            for k in 0..64 {
+                let t = eps + (k as f64 + 0.37) / 64.0 * horizon;
+                if !away_from_surfaces(&c, ray, t) {
+                    continue;
+                }
+                let x = ray.at(t);
+                let inside: Vec<bool> =
+                    c.blocks().iter().map(|b| b.solids().iter().all(|s| s.value(&x) <= 0.0)).collect();
+                for (i, &inn) in inside.iter().enumerate() {
+                    let in_set = sets.iter().any(|(id, s)| id.index() == i && s.contains(t));
+                    prop_assert_eq!(in_set, inn, "block {} at t = {}", i, t);
+                }
+                let owner = oracle_owner(&inside, &transparent);
+                prop_assert_eq!(p.owner_at(t), owner, "owner at t = {}", t);
+                prop_assert_eq!(c.contains_point(&x), owner, "contains_point at t = {}", t);
+            }
+        }
+    }
+}
+
+#[test]
+fn no_nan_from_degenerate_queries() {
+    let c = build(&[(vec![Solid::from(Quadric::cone())], false, 0), (vec![Solid::from(Quadric::sphere())], true, 0)]);
+    // Through the cone's apex, where the normal is undefined.
+    let r = Ray::new(Point3::new(0.0, -5.0, 0.0), Vector3::y()).expect("ray");
+    for e in c.partition(&r).events {
+        assert!(e.t.is_finite() && e.normal.iter().all(|x| x.is_finite()));
+    }
+    assert!(c.cast_ray(&r, f64::NAN).is_none());
+    assert_eq!(c.contains_point(&Point3::new(f64::NAN, 0.0, 0.0)), None);
+}
+
+/// A small bounded block (ball, capped tube or cube of size 0.1–0.5) placed
+/// at random in `[-3, 3]³`, opaque or transparent with one of two materials.
+fn small_block() -> impl Strategy<Value = Spec> {
+    use crate::common::{cuboid, hs, post};
+    let shape = prop_oneof![
+        Just(vec![Solid::from(Quadric::sphere())]),
+        Just(post(0.0, 0.0, 1.0, -1.0, 1.0)),
+        Just(cuboid([-1.0; 3], [1.0; 3])),
+        Just(vec![Solid::from(Quadric::cone()), hs(0.0, -1.0, 0.0, 0.2), hs(0.0, 1.0, 0.0, -1.0)]),
+    ];
+    (shape, strategies::transform(), 0.05f64..0.25, strategies::point(3.0), any::<bool>(), 0u32..2).prop_map(
+        |(shape, m, size, at, transparent, material)| {
+            let m = quadric::Transform::scale(size)
+                .expect("finite")
+                .then(&m)
+                .then(&quadric::Transform::translate(at.coords).expect("finite"));
+            (shape.iter().map(|s| s.transformed(&m)).collect(), transparent, material)
+        },
+    )
+}
+
+/// The first visible change of owner after ε, by brute force.
+fn brute_first(c: &Complex, ray: &Ray) -> Option<(f64, Option<BlockId>, Option<BlockId>)> {
+    brute_events(c, ray).into_iter().find(|(t, b, a)| *t > c.epsilon() && visible(c, *b, *a))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases((ProptestConfig::default().cases / 16).max(8)))]
+
+    /// With a few hundred blocks the BVH is deep; it must find exactly the
+    /// hits brute force over every block finds, with and without transparency.
+    #[test]
+    fn bvh_agrees_with_brute_force_on_large_scenes(
+        specs in proptest::collection::vec(small_block(), 150..300),
+        rays in proptest::collection::vec(ray_spec(), 40),
+        all_opaque in any::<bool>(),
+    ) {
+        let specs: Vec<Spec> =
+            specs.into_iter().map(|(s, t, m)| (s, t && !all_opaque, m)).collect();
+        let c = build(&specs);
+        for ray in &rays {
+            let brute = brute_first(&c, ray);
+            let hit = c.cast_ray(ray, f64::INFINITY);
+            prop_assert_eq!(hit.map(|h| h.t), brute.map(|b| b.0));
+            if let (Some(h), Some((_, before, after))) = (hit, brute) {
+                prop_assert_eq!(Some(h.block), if h.entering { after } else { before });
+            }
+            let events: Vec<_> = c.partition(ray).events.iter().map(|e| (e.t, e.before, e.after)).collect();
+            prop_assert_eq!(events, brute_events(&c, ray));
+        }
+    }
+}
+
+#[test]
+fn a_complex_is_send_and_sync() {
+    fn check<T: Send + Sync>() {}
+    check::<Complex>();
+}

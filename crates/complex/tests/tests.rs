@@ -1,0 +1,8 @@
+//! The complex crate's one integration-test binary (see `Cargo.toml`).
+
+mod alloc;
+mod bounds;
+mod common;
+mod oracle;
+mod seed;
+mod table;
