@@ -1,0 +1,120 @@
+//! The render loop: one ray per pixel centre, rows in parallel.
+
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+
+use crate::error::Error;
+use crate::scene::World;
+use crate::shade::{Scratch, Shader};
+
+/// One pixel of every output channel.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Pixel {
+    /// Linear RGB.
+    pub rgb: [f32; 3],
+    /// Coverage: 1 where the primary ray hit a block, else 0.
+    pub alpha: f32,
+    /// Distance along the primary ray, `+∞` on a miss.
+    pub depth: f32,
+    /// World-space unit normal facing the camera, zero on a miss.
+    pub normal: [f32; 3],
+    /// 1-based block index in priority order, 0 on a miss.
+    pub block: u32,
+    /// 1-based solid index within the block, 0 on a miss.
+    pub object: u32,
+}
+
+/// A rendered image, row-major from the top-left pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width * height` pixels, row by row, top row first.
+    pub pixels: Vec<Pixel>,
+}
+
+impl Frame {
+    /// The pixel in row `i` (from the top) and column `j`.
+    pub fn at(&self, i: u32, j: u32) -> &Pixel {
+        &self.pixels[i as usize * self.width as usize + j as usize]
+    }
+}
+
+/// How a render went.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stats {
+    /// Rays cast: primary, shadow, reflected and refracted.
+    pub rays: u64,
+    /// Wall-clock time of the render loop.
+    pub elapsed: Duration,
+}
+
+impl Stats {
+    /// Rays per second.
+    pub fn rays_per_second(&self) -> f64 {
+        self.rays as f64 / self.elapsed.as_secs_f64().max(1e-9)
+    }
+}
+
+/// Render options beyond the scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Options {
+    /// Worker threads (default: one per core).
+    pub threads: Option<usize>,
+}
+
+/// Renders `world` with its camera. `progress` is called once per finished
+/// row (from worker threads).
+pub fn render(world: &World, options: Options, progress: &(dyn Fn() + Sync)) -> Result<(Frame, Stats), Error> {
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = options.threads {
+        if n == 0 {
+            return Err(Error::Options("--threads must be at least 1".into()));
+        }
+        builder = builder.num_threads(n);
+    }
+    let pool = builder.build().map_err(|e| Error::Options(format!("cannot start worker threads: {e}")))?;
+    let start = Instant::now();
+    let (rows, rays): (Vec<Vec<Pixel>>, Vec<u64>) = pool.install(|| {
+        (0..world.camera.height())
+            .into_par_iter()
+            .map(|i| {
+                let row = render_row(world, i);
+                progress();
+                row
+            })
+            .unzip()
+    });
+    let elapsed = start.elapsed();
+    let pixels = rows.into_iter().flatten().collect();
+    let frame = Frame { width: world.camera.width(), height: world.camera.height(), pixels };
+    Ok((frame, Stats { rays: rays.iter().sum(), elapsed }))
+}
+
+fn render_row(world: &World, i: u32) -> (Vec<Pixel>, u64) {
+    let shader = Shader::new(world);
+    let mut scratch = Scratch::default();
+    let cam = &world.camera;
+    let row = (0..cam.width())
+        .map(|j| {
+            let ray = cam.ray(i, j);
+            let (c, hit) = shader.primary(&ray, &mut scratch);
+            let rgb = [c.x as f32, c.y as f32, c.z as f32];
+            match hit {
+                None => Pixel { rgb, depth: f32::INFINITY, ..Pixel::default() },
+                Some(s) => Pixel {
+                    rgb,
+                    alpha: 1.0,
+                    depth: s.t as f32,
+                    normal: [s.normal.x as f32, s.normal.y as f32, s.normal.z as f32],
+                    block: s.block.0 + 1,
+                    object: s.solid + 1,
+                },
+            }
+        })
+        .collect();
+    (row, scratch.rays)
+}

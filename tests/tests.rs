@@ -1,0 +1,6 @@
+//! End-to-end tests of the `komplex` binary (one test binary, topic modules).
+#![allow(clippy::unwrap_used)]
+
+mod support;
+
+mod cli;
