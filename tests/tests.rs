@@ -3,4 +3,7 @@
 
 mod support;
 
+mod camera;
 mod cli;
+mod exr_output;
+mod shading;
