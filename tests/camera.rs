@@ -1,58 +1,8 @@
 //! The camera of SPEC §4, end to end: spheres land on the pixels the
 //! formulas predict, and `Z` is the analytic distance along the ray.
 
+use crate::geom::{add, dot, mul, sub, Cam, V};
 use crate::support::{rendered, tempdir, write_scene};
-
-type V = [f64; 3];
-
-fn sub(a: V, b: V) -> V {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn add(a: V, b: V) -> V {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-fn mul(s: f64, a: V) -> V {
-    [s * a[0], s * a[1], s * a[2]]
-}
-fn dot(a: V, b: V) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn unit(a: V) -> V {
-    mul(1.0 / dot(a, a).sqrt(), a)
-}
-fn cross(a: V, b: V) -> V {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-
-struct Cam {
-    e: V,
-    d: V,
-    u: V,
-    w: u32,
-    h: u32,
-    angle: f64,
-}
-
-impl Cam {
-    /// The unit direction of the ray through pixel (i, j), literally as in SPEC §4.
-    fn ray(&self, i: u32, j: u32) -> V {
-        let d = unit(self.d);
-        let u = unit(sub(self.u, mul(dot(self.u, d), d)));
-        let r = cross(d, u);
-        let (dx, dy) = (f64::from(self.w), f64::from(self.h));
-        let m = add(self.e, mul((dx * dx + dy * dy).sqrt() / (2.0 * (self.angle.to_radians() / 2.0).tan()), d));
-        let p00 = add(sub(m, mul((dx - 1.0) / 2.0, r)), mul((dy - 1.0) / 2.0, u));
-        let pij = add(sub(p00, mul(f64::from(i), u)), mul(f64::from(j), r));
-        unit(sub(pij, self.e))
-    }
-
-    fn json(&self) -> String {
-        format!(
-            r#""camera": {{ "eye": {:?}, "direction": {:?}, "up": {:?}, "width": {}, "height": {}, "aperture": {} }}"#,
-            self.e, self.d, self.u, self.w, self.h, self.angle
-        )
-    }
-}
 
 /// First hit of the ray `e + t d` with the sphere `|x - c| = r`, classified:
 /// `Some(Some(t))` a clear hit, `Some(None)` a clear miss, `None` too close to

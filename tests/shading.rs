@@ -1,39 +1,8 @@
 //! Shading against analytic values (SPEC §5): ambient plus Lambert, and
 //! shadows from opaque and transparent blockers.
 
+use crate::geom::{add, dot, mul, prod, sub, unit, Cam, V};
 use crate::support::{rendered, tempdir, write_scene, Exr};
-
-type V = [f64; 3];
-
-fn sub(a: V, b: V) -> V {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn add(a: V, b: V) -> V {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-fn mul(s: f64, a: V) -> V {
-    [s * a[0], s * a[1], s * a[2]]
-}
-fn dot(a: V, b: V) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn unit(a: V) -> V {
-    mul(1.0 / dot(a, a).sqrt(), a)
-}
-fn cross(a: V, b: V) -> V {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-
-/// SPEC §4 ray direction through pixel (i, j).
-fn pixel_ray(e: V, d: V, up: V, w: u32, h: u32, angle: f64, i: u32, j: u32) -> V {
-    let d = unit(d);
-    let u = unit(sub(up, mul(dot(up, d), d)));
-    let r = cross(d, u);
-    let (dx, dy) = (f64::from(w), f64::from(h));
-    let f = (dx * dx + dy * dy).sqrt() / (2.0 * (angle.to_radians() / 2.0).tan());
-    let v = add(add(mul(f, d), mul(f64::from(j) - (dx - 1.0) / 2.0, r)), mul((dy - 1.0) / 2.0 - f64::from(i), u));
-    unit(v)
-}
 
 /// Parameters `t` where `e + t d` (d unit) crosses the sphere, if it does clearly;
 /// `Err(())` when too close to tangent to call.
@@ -57,17 +26,15 @@ fn close(got: V, want: V, what: &str) {
     }
 }
 
-fn prod(a: V, b: V) -> V {
-    [a[0] * b[0], a[1] * b[1], a[2] * b[2]]
-}
-
 #[test]
 fn diffuse_sphere_matches_lambert() {
-    let (e, d, up, w, h, angle) = ([0.0, 0.0, 5.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0], 32, 24, 50.0);
+    let cam = Cam { e: [0.0, 0.0, 5.0], d: [0.0, 0.0, -1.0], u: [0.0, 1.0, 0.0], w: 32, h: 24, angle: 50.0 };
+    let (e, w, h) = (cam.e, cam.w, cam.h);
     let (sa, ma, md, ld) = ([0.1, 0.2, 0.3], [0.2, 0.3, 0.4], [0.5, 0.6, 0.7], [0.9, 0.8, 0.7]);
     let light = [3.0, 4.0, 5.0];
+    let cam_json = cam.json();
     let json = format!(
-        r#"{{ "camera": {{ "eye": {e:?}, "direction": {d:?}, "width": {w}, "height": {h} }},
+        r#"{{ {cam_json},
              "settings": {{ "ambient": {sa:?}, "background": [0.25, 0.5, 0.75] }},
              "lights": [ {{ "position": {light:?}, "diffuse": {ld:?}, "specular": [5, 5, 5] }} ],
              "materials": {{ "matte": {{ "ambient": {ma:?}, "diffuse": {md:?} }} }},
@@ -78,7 +45,7 @@ fn diffuse_sphere_matches_lambert() {
     let mut lit = 0;
     for i in 0..h {
         for j in 0..w {
-            let ray = pixel_ray(e, d, up, w, h, angle, i, j);
+            let ray = cam.ray(i, j);
             let (iu, ju) = (i as usize, j as usize);
             match sphere_span(e, ray, [0.0; 3], 1.0) {
                 Err(()) => {}
@@ -99,11 +66,13 @@ fn diffuse_sphere_matches_lambert() {
 /// A floor under a ball, lit from above: floor pixels are ambient plus
 /// Lambert times what the ball lets through on the way to the light.
 fn shadow_case(transparent: bool, transmit: V) {
-    let (e, d, up, w, h, angle) = ([0.0, 3.0, 6.0], [0.0, -3.0, -6.0], [0.0, 1.0, 0.0], 40, 30, 50.0);
+    let cam = Cam { e: [0.0, 3.0, 6.0], d: [0.0, -3.0, -6.0], u: [0.0, 1.0, 0.0], w: 40, h: 30, angle: 50.0 };
+    let (e, w, h) = (cam.e, cam.w, cam.h);
     let (sa, ma, md) = ([0.1, 0.1, 0.1], [0.3, 0.3, 0.3], [0.6, 0.5, 0.4]);
     let (light, c, r) = ([0.5, 5.0, 0.3], [0.0, 1.2, 0.0], 0.7);
+    let cam_json = cam.json();
     let json = format!(
-        r#"{{ "camera": {{ "eye": {e:?}, "direction": {d:?}, "width": {w}, "height": {h} }},
+        r#"{{ {cam_json},
              "settings": {{ "ambient": {sa:?} }},
              "lights": [ {{ "position": {light:?} }} ],
              "materials": {{ "floor": {{ "ambient": {ma:?}, "diffuse": {md:?} }},
@@ -120,7 +89,7 @@ fn shadow_case(transparent: bool, transmit: V) {
     let (mut shadowed, mut open) = (0, 0);
     for i in 0..h {
         for j in 0..w {
-            let ray = pixel_ray(e, d, up, w, h, angle, i, j);
+            let ray = cam.ray(i, j);
             // Only floor pixels seen directly (not through or past the ball).
             if !matches!(sphere_span(e, ray, c, r), Ok(None)) || ray[1] >= 0.0 {
                 continue;

@@ -1,6 +1,7 @@
 //! End-to-end tests of the `komplex` binary (one test binary, topic modules).
 #![allow(clippy::unwrap_used)]
 
+mod geom;
 mod support;
 
 mod camera;
