@@ -6,5 +6,7 @@ mod support;
 
 mod camera;
 mod cli;
+mod errors;
 mod exr_output;
 mod shading;
+mod trace;

@@ -54,7 +54,10 @@ impl SceneError {
     }
 
     pub(crate) fn from_json(e: serde_path_to_error::Error<serde_json::Error>) -> Self {
+        // serde_path_to_error writes `?` for a place it could not name
+        // (inside a syntax error); the line and column still say where.
         let path = e.path().to_string();
+        let path = path.trim_end_matches('?').trim_end_matches('.').to_string();
         let inner = e.inner();
         let (line, column) = (inner.line(), inner.column());
         let raw = inner.to_string();
@@ -63,7 +66,10 @@ impl SceneError {
             Some(i) => raw[..i].to_string(),
             None => raw,
         };
-        let message = with_suggestion(message);
+        let message = with_suggestion(message).replace(
+            "data did not match any variant of untagged enum Scale",
+            "`scale` takes a number or an array [sx, sy, sz]",
+        );
         SceneError::Parse { path, line, column, message }
     }
 }
@@ -77,7 +83,7 @@ fn with_suggestion(message: String) -> String {
     let Some(end) = rest.find('`') else { return message };
     let given = &rest[..end];
     let expected = &rest[end..];
-    let candidates: Vec<&str> = expected.split('`').skip(1).step_by(2).collect();
+    let candidates: Vec<&str> = expected.split('`').skip(2).step_by(2).collect();
     match nearest(given, candidates.iter().copied()) {
         Some(n) => format!("{message} (did you mean `{n}`?)"),
         None => message,
@@ -90,7 +96,10 @@ pub fn nearest<'a>(given: &str, candidates: impl Iterator<Item = &'a str>) -> Op
     let given_lc = given.to_lowercase();
     candidates
         .map(|c| (levenshtein(&given_lc, &c.to_lowercase()), c))
-        .filter(|(d, c)| *d <= (c.chars().count().max(given.chars().count()) / 2).max(1))
+        .filter(|(d, c)| {
+            let len = c.chars().count().max(given.chars().count());
+            *d < len && *d <= (len / 2).max(2)
+        })
         .min_by_key(|(d, _)| *d)
         .map(|(_, c)| c)
 }
