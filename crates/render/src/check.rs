@@ -36,13 +36,17 @@ pub fn check(world: &World) -> Report {
     let complex = &world.complex;
     let mut warnings = Vec::new();
     let mut bounds: Option<([f64; 3], [f64; 3])> = None;
+    // A kernel without bounds reports every block as infinite; warning about
+    // each block then says nothing, so warn per block only when the kernel
+    // bounds at least one.
+    let kernel_bounds = (0..complex.blocks().len()).any(|i| complex.block_aabb(BlockId(i as u32)).is_bounded());
     for (i, b) in complex.blocks().iter().enumerate() {
         let id = BlockId(i as u32);
         let aabb = complex.block_aabb(id);
         if aabb.is_bounded() {
             let (lo, hi) = bounds.unwrap_or(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]));
             bounds = Some(([0, 1, 2].map(|k| lo[k].min(aabb.min[k])), [0, 1, 2].map(|k| hi[k].max(aabb.max[k]))));
-        } else {
+        } else if kernel_bounds {
             warnings.push(format!("block {} \"{}\" ({}) may be unbounded", i + 1, b.name(), world.blocks[i].path));
         }
         if b.is_transparent() {
@@ -109,7 +113,7 @@ impl fmt::Display for Report {
         )?;
         match self.bounds {
             Some((lo, hi)) => writeln!(f, "bounds: {lo:?} .. {hi:?}")?,
-            None => writeln!(f, "bounds: unknown (no block has a finite box)")?,
+            None => writeln!(f, "bounds: unknown (the kernel gives no block a finite box)")?,
         }
         writeln!(f, "image: {}x{}, epsilon {:e}", self.size.0, self.size.1, self.epsilon)?;
         for w in &self.warnings {

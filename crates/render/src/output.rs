@@ -24,6 +24,16 @@ pub(crate) fn write_atomic(
         write(&mut buffered).map_err(|message| Error::Encode { path: path.to_path_buf(), message })?;
         buffered.into_inner().map_err(|e| io(e.into_error()))?;
     }
+    // Temporary files are private (0600); give the result the permissions
+    // of the file it replaces, or ordinary ones (0644) for a new file.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let perms = std::fs::metadata(path)
+            .map(|m| m.permissions())
+            .unwrap_or_else(|_| std::fs::Permissions::from_mode(0o644));
+        tmp.as_file().set_permissions(perms).map_err(io)?;
+    }
     tmp.as_file().sync_all().map_err(io)?;
     // On error the temporary file is removed when `tmp` drops.
     tmp.persist(path).map_err(|e| io(e.error))?;
