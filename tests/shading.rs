@@ -130,3 +130,137 @@ fn opaque_ball_casts_a_full_shadow() {
 fn transparent_ball_attenuates_by_transmit() {
     shadow_case(true, [0.5, 0.25, 0.1]);
 }
+
+const NO_LIGHT_WALLS: &str = r#""settings": { "ambient": [1, 1, 1], "max_depth": 5 },
+    "materials": { "glass": { "transmit": [1, 1, 1], "ior": 1.5 },
+                   "red": { "ambient": [1, 0, 0] }, "blue": { "ambient": [0, 0, 1] }, "green": { "ambient": [0, 1, 0] } }"#;
+
+/// Refracts unit `d` at a surface with unit normal `n` facing against `d`.
+fn snell(d: V, n: V, eta: f64) -> V {
+    let cos_i = -dot(d, n);
+    let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+    assert!(k > 0.0);
+    add(mul(eta, d), mul(eta * cos_i - k.sqrt(), n))
+}
+
+#[test]
+fn a_tilted_slab_shifts_the_view_by_snells_law() {
+    // Eye at the origin looking down -z at a wall at z = -10: red for x < 0,
+    // blue for x > 0. Between them a glass slab (ior 1.5) tilted by 40°
+    // about y, 2 units thick. Which colour a pixel shows is decided by
+    // where the twice-refracted ray meets the wall.
+    let cam = Cam { e: [0.0; 3], d: [0.0, 0.0, -1.0], u: [0.0, 1.0, 0.0], w: 64, h: 8, angle: 40.0 };
+    let (s, c) = 40f64.to_radians().sin_cos();
+    let nrm = [s, 0.0, c];
+    let json = format!(
+        r#"{{ {}, {NO_LIGHT_WALLS},
+             "blocks": [ {{ "name": "slab", "material": "glass", "transparent": true,
+                            "objects": [ {{ "halfspace": [{s:?}, 0, {c:?}, 1] }}, {{ "halfspace": [{:?}, 0, {:?}, -3] }} ] }},
+                         {{ "name": "left", "material": "red", "objects": [ {{ "halfspace": [0, 0, 1, 10] }}, {{ "halfspace": [1, 0, 0, 0] }} ] }},
+                         {{ "name": "right", "material": "blue", "objects": [ {{ "halfspace": [0, 0, 1, 10] }}, {{ "halfspace": [-1, 0, 0, 0] }} ] }} ] }}"#,
+        cam.json(),
+        -s,
+        -c
+    );
+    let dir = tempdir();
+    let img = rendered(dir.path(), &write_scene(dir.path(), "slab.json", &json));
+    let (mut red, mut blue) = (0, 0);
+    let mut straight_would_differ = 0;
+    for i in 0..cam.h {
+        for j in 0..cam.w {
+            let d = cam.ray(i, j);
+            // Into the slab through the plane nrm·x = -1, out through nrm·x = -3.
+            let p1 = mul(-1.0 / dot(nrm, d), d);
+            let d1 = snell(d, nrm, 1.0 / 1.5);
+            let p2 = add(p1, mul((-3.0 - dot(nrm, p1)) / dot(nrm, d1), d1));
+            let d2 = snell(d1, nrm, 1.5);
+            let x = p2[0] + (-10.0 - p2[2]) / d2[2] * d2[0];
+            let x_straight = d[0] * (-10.0 / d[2]);
+            if x.abs() < 0.05 {
+                continue;
+            }
+            let want = if x < 0.0 { [1.0, 0.0, 0.0] } else { [0.0, 0.0, 1.0] };
+            if x < 0.0 {
+                red += 1;
+            } else {
+                blue += 1;
+            }
+            if (x < 0.0) != (x_straight < 0.0) {
+                straight_would_differ += 1;
+            }
+            close(rgb(&img, i as usize, j as usize), want, &format!("pixel ({i},{j}), wall x = {x}"));
+        }
+    }
+    assert!(
+        red > 20 && blue > 20 && straight_would_differ >= 8,
+        "{red} red, {blue} blue, {straight_would_differ} shifted"
+    );
+}
+
+#[test]
+fn a_prism_reflects_totally_inside() {
+    // A right-angled glass prism: rays entering its front face head-on meet
+    // the hypotenuse at 45°, beyond the critical angle asin(1/1.5) = 41.8°,
+    // reflect totally towards -x and leave through the side face onto the
+    // green wall. The red wall straight behind is not seen.
+    let cam = Cam { e: [0.0, 0.0, 3.0], d: [0.0, 0.0, -1.0], u: [0.0, 1.0, 0.0], w: 41, h: 41, angle: 30.0 };
+    let json = format!(
+        r#"{{ {}, {NO_LIGHT_WALLS},
+             "blocks": [ {{ "name": "prism", "material": "glass", "transparent": true,
+                            "objects": [ {{ "halfspace": [0, 0, 1, 2] }}, {{ "halfspace": [1, 0, -1, -3] }}, {{ "halfspace": [-1, 0, 0, -1] }},
+                                         {{ "halfspace": [0, 1, 0, -1] }}, {{ "halfspace": [0, -1, 0, -1] }} ] }},
+                         {{ "name": "back", "material": "red", "objects": [ {{ "halfspace": [0, 0, 1, 10] }} ] }},
+                         {{ "name": "side", "material": "green", "objects": [ {{ "halfspace": [1, 0, 0, 5] }} ] }} ] }}"#,
+        cam.json()
+    );
+    let dir = tempdir();
+    let img = rendered(dir.path(), &write_scene(dir.path(), "prism.json", &json));
+    let mut checked = 0;
+    for i in 0..cam.h {
+        for j in 0..cam.w {
+            // Rays within 3° of the axis: the hypotenuse angle stays within 45° ± 2°.
+            if dot(cam.ray(i, j), cam.d).acos().to_degrees() > 3.0 {
+                continue;
+            }
+            checked += 1;
+            close(rgb(&img, i as usize, j as usize), [0.0, 1.0, 0.0], &format!("pixel ({i},{j})"));
+        }
+    }
+    assert!(checked > 50, "{checked}");
+}
+
+#[test]
+fn index_one_glass_is_invisible() {
+    // A transparent block with ior 1, transmit 1 and no surface terms bends
+    // nothing and dims nothing: colours equal the scene without it.
+    let base = |extra: &str| {
+        format!(
+            r#"{{ "camera": {{ "eye": [0, 2, 6], "direction": [0, -2, -6], "width": 32, "height": 24 }},
+                 "lights": [ {{ "position": [2, 5, 3] }} ],
+                 "materials": {{ "air": {{ "transmit": [1, 1, 1] }}, "m": {{ "ambient": [0.2, 0.2, 0.2], "diffuse": [0.7, 0.5, 0.3], "specular": [0.5, 0.5, 0.5] }} }},
+                 "blocks": [ {extra}
+                   {{ "name": "ball", "material": "m", "objects": [ {{ "sphere": {{ "radius": 0.8, "center": [0, 0.8, 0] }} }} ] }},
+                   {{ "name": "floor", "material": "m", "objects": [ {{ "halfspace": [0, 1, 0, 0] }}, {{ "halfspace": [0, -1, 0, -1] }} ] }} ] }}"#
+        )
+    };
+    let dir = tempdir();
+    let plain = rendered(dir.path(), &write_scene(dir.path(), "plain.json", &base("")));
+    let with = rendered(
+        dir.path(),
+        &write_scene(
+            dir.path(),
+            "with.json",
+            &base(
+                r#"{ "name": "air", "material": "air", "transparent": true, "objects": [ { "sphere": { "radius": 1.5, "center": [0.5, 1, 1] } } ] },"#,
+            ),
+        ),
+    );
+    let mut through = 0;
+    for i in 0..24 {
+        for j in 0..32 {
+            through += usize::from(with.at("id.block", i, j) == 1.0);
+            close(rgb(&with, i, j), rgb(&plain, i, j), &format!("pixel ({i},{j})"));
+        }
+    }
+    assert!(through > 50, "only {through} pixels look through the invisible block");
+}

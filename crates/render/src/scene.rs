@@ -708,3 +708,130 @@ fn solid_of(o: &ObjectSpec, place: &str) -> Result<Solid, SceneError> {
         unreachable!("exactly one shape key was checked above")
     })
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    const CAMERA: &str = r#""camera": { "eye": [0, 0, 50], "direction": [0, 0, -1], "width": 4, "height": 3 }"#;
+
+    fn world(blocks: &str) -> World {
+        let text = format!(r#"{{ {CAMERA}, "materials": {{ "a": {{}}, "b": {{}} }}, "blocks": [ {blocks} ] }}"#);
+        SceneFile::from_json(&text).unwrap().to_world().unwrap()
+    }
+
+    /// The first block of `blocks` contains exactly the points `inside` and none of `outside`.
+    fn check(blocks: &str, inside: &[[f64; 3]], outside: &[[f64; 3]]) {
+        let w = world(blocks);
+        let b = &w.complex.blocks()[0];
+        for p in inside {
+            assert!(b.contains_point(&Point3::from(*p)), "{p:?} should be inside {blocks}");
+        }
+        for p in outside {
+            assert!(!b.contains_point(&Point3::from(*p)), "{p:?} should be outside {blocks}");
+        }
+    }
+
+    #[test]
+    fn transform_steps_apply_in_list_order() {
+        // Scale first, then translate: radius 0.5 around (0, 1.5, 0).
+        let b =
+            r#"{ "objects": [ { "sphere": {}, "transform": [ { "scale": 0.5 }, { "translate": [0, 1.5, 0] } ] } ] }"#;
+        check(b, &[[0.0, 1.9, 0.0], [0.0, 1.1, 0.0]], &[[0.0, 0.9, 0.0], [0.0, 2.1, 0.0]]);
+        // Translate first, then scale: radius 0.5 around (0, 0.75, 0).
+        let b =
+            r#"{ "objects": [ { "sphere": {}, "transform": [ { "translate": [0, 1.5, 0] }, { "scale": 0.5 } ] } ] }"#;
+        check(b, &[[0.0, 1.2, 0.0], [0.0, 0.3, 0.0]], &[[0.0, 1.3, 0.0], [0.0, 0.2, 0.0]]);
+        // Rotate an ellipsoid stretched along x by 90° about z: it now stretches along y.
+        let b =
+            r#"{ "objects": [ { "sphere": {}, "transform": [ { "scale": [2, 0.5, 0.5] }, { "rotate_z": 90 } ] } ] }"#;
+        check(b, &[[0.0, 1.9, 0.0]], &[[1.9, 0.0, 0.0]]);
+        // A general matrix (row-major, x' = M x): translation in the last column.
+        let b = r#"{ "objects": [ { "sphere": {}, "transform": [ { "matrix": [[1,0,0,5],[0,1,0,0],[0,0,1,0],[0,0,0,1]] } ] } ] }"#;
+        check(b, &[[5.9, 0.0, 0.0]], &[[0.5, 0.0, 0.0]]);
+    }
+
+    #[test]
+    fn block_transform_follows_object_transform_and_groups_follow_blocks() {
+        // Object: scale 0.5 about the origin; block: translate by 2 along x;
+        // inner group: scale 2 (doubles both radius and offset); outer group: translate y by 10.
+        let b = r#"{ "group": "outer", "transform": [ { "translate": [0, 10, 0] } ], "blocks": [
+                     { "group": "inner", "transform": [ { "scale": 2 } ], "blocks": [
+                       { "name": "x", "transform": [ { "translate": [2, 0, 0] } ],
+                         "objects": [ { "sphere": {}, "transform": [ { "scale": 0.5 } ] } ] } ] } ] }"#;
+        check(
+            b,
+            &[[4.0, 10.0, 0.0], [4.9, 10.0, 0.0], [3.1, 10.0, 0.0]],
+            &[[5.1, 10.0, 0.0], [4.0, 0.0, 0.0], [2.0, 10.0, 0.0]],
+        );
+    }
+
+    #[test]
+    fn shapes_and_complements() {
+        check(
+            r#"{ "objects": [ { "cylinder": { "radius": 2, "axis": "z" } } ] }"#,
+            &[[1.9, 0.0, 100.0]],
+            &[[2.1, 0.0, 0.0]],
+        );
+        check(r#"{ "objects": [ { "cone": {} } ] }"#, &[[0.0, 2.0, 1.0], [0.0, -2.0, 1.0]], &[[2.0, 1.0, 0.0]]);
+        check(r#"{ "objects": [ { "paraboloid": {} } ] }"#, &[[0.0, 1.0, 0.9]], &[[0.0, 1.0, 1.1], [0.0, -0.1, 0.0]]);
+        check(
+            r#"{ "objects": [ { "hyperboloid": { "sheets": 1 } } ] }"#,
+            &[[0.0, 0.0, 0.9], [2.0, 2.0, 0.0]],
+            &[[1.1, 0.0, 0.0]],
+        );
+        check(
+            r#"{ "objects": [ { "hyperboloid": { "sheets": 2 } } ] }"#,
+            &[[0.0, 1.1, 0.0], [0.0, -1.1, 0.0]],
+            &[[0.0, 0.0, 0.0]],
+        );
+        check(
+            r#"{ "objects": [ { "quadric": [1, 1, 1, 0, 0, 0, -1, 0, 0, 0] } ] }"#,
+            &[[1.9, 0.0, 0.0]],
+            &[[-0.1, 0.0, 0.0]],
+        );
+        check(r#"{ "objects": [ { "halfspace": [0, 1, 0, -1] } ] }"#, &[[0.0, 0.9, 0.0]], &[[0.0, 1.1, 0.0]]);
+        check(
+            r#"{ "objects": [ { "sphere": {} }, { "sphere": { "radius": 0.5 }, "complement": true } ] }"#,
+            &[[0.0, 0.75, 0.0]],
+            &[[0.0, 0.25, 0.0], [0.0, 1.25, 0.0]],
+        );
+    }
+
+    #[test]
+    fn groups_flatten_depth_first_and_materials_resolve() {
+        let w = world(
+            r#"{ "name": "one", "material": "b", "objects": [ { "sphere": {} } ] },
+               { "group": "g", "blocks": [ { "name": "two", "objects": [ { "sphere": {} } ] },
+                                            { "group": "h", "blocks": [ { "name": "three", "objects": [ { "sphere": {} } ] } ] } ] },
+               { "objects": [ { "sphere": {}, "material": "a" }, { "sphere": {} } ], "material": "b" }"#,
+        );
+        let names: Vec<&str> = w.complex.blocks().iter().map(|b| b.name()).collect();
+        assert_eq!(names, ["one", "two", "three", "block 4"]);
+        assert_eq!(w.blocks[2].path, "blocks[1].blocks[1].blocks[0]");
+        let id = complex::BlockId(3);
+        assert_eq!(w.surface_material(id, 0).name, "a");
+        assert_eq!(w.surface_material(id, 1).name, "b");
+        assert_eq!(w.block_material(id).name, "b");
+        assert_eq!(w.block_material(complex::BlockId(1)).name, "(default)");
+    }
+
+    #[test]
+    fn lights_split_colour_into_diffuse_and_specular() {
+        let text = format!(
+            r#"{{ {CAMERA}, "lights": [ {{ "position": [0, 0, 0], "color": [0.5, 0.5, 0.5], "specular": [1, 0, 0] }} ],
+                 "blocks": [ {{ "objects": [ {{ "sphere": {{}} }} ] }} ] }}"#
+        );
+        let w = SceneFile::from_json(&text).unwrap().to_world().unwrap();
+        assert_eq!(w.lights[0].diffuse, Vector3::repeat(0.5));
+        assert_eq!(w.lights[0].specular, Vector3::new(1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn schema_key_is_allowed() {
+        let text =
+            format!(r#"{{ "$schema": "x", {CAMERA}, "blocks": [ {{ "objects": [ {{ "sphere": {{}} }} ] }} ] }}"#);
+        assert!(SceneFile::from_json(&text).unwrap().to_world().is_ok());
+    }
+}
