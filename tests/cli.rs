@@ -68,3 +68,35 @@ fn check_summarises_and_warns() {
         assert!(out.contains(needle), "lacks {needle:?}:\n{out}");
     }
 }
+
+#[test]
+fn scenes_validate_against_the_schema_and_bad_ones_do_not() {
+    let dir = tempdir();
+    let cam = r#""camera": { "eye": [0, 0, 5], "direction": [0, 0, -1] }"#;
+    let bad = [
+        format!(r#"{{ {cam}, "blocks": [ {{ "objects": [ {{ "sphere": {{}}, "cone": {{}} }} ] }} ] }}"#),
+        format!(r#"{{ {cam}, "blocks": [ {{ "objects": [ {{ "complement": true }} ] }} ] }}"#),
+        format!(r#"{{ {cam}, "blocks": [ {{ "group": "g" }} ] }}"#),
+        format!(r#"{{ {cam}, "blocks": [ {{ "objects": [ {{ "sphere": {{ "raduis": 1 }} }} ] }} ] }}"#),
+        format!(
+            r#"{{ {cam}, "blocks": [ {{ "objects": [ {{ "sphere": {{}}, "transform": [ {{ "scale": [1, 2] }} ] }} ] }} ] }}"#
+        ),
+        format!(r#"{{ {cam}, "blocks": [], "lights": [ {{ "color": [1, 1, 1] }} ] }}"#),
+    ];
+    let bad_paths: Vec<_> =
+        bad.iter().enumerate().map(|(i, j)| write_scene(dir.path(), &format!("bad{i}.json"), j)).collect();
+    let schema = root().join("docs/scene.schema.json");
+    let scenes = all_scenes();
+    let mut args: Vec<&std::path::Path> = vec![schema.as_path()];
+    args.extend(scenes.iter().map(|p| p.as_path()));
+    args.extend(bad_paths.iter().map(|p| p.as_path()));
+    let Some(out) = crate::support::python("validate_schema.py", &args) else { return };
+    let lines: Vec<String> = String::from_utf8_lossy(&out.stdout).lines().map(str::to_string).collect();
+    assert_eq!(lines.len(), scenes.len() + bad.len());
+    for (line, scene) in lines.iter().zip(&scenes) {
+        assert!(line.starts_with("ok "), "{} does not validate: {line}", scene.display());
+    }
+    for (line, json) in lines[scenes.len()..].iter().zip(&bad) {
+        assert!(line.starts_with("invalid "), "the schema accepts {json}");
+    }
+}

@@ -101,29 +101,37 @@ fn number(v: &serde_json::Value) -> f64 {
     }
 }
 
-/// Reads an EXR file with the Python `OpenEXR` package (the reference
-/// implementation's bindings), independent of the `exr` crate that wrote it.
-///
-/// Returns `None` with a printed notice when Python or the package is
-/// missing, except under CI (`CI=true`), where that is a failure.
-pub fn read_exr(path: &Path) -> Option<Exr> {
-    let script = root().join("tests").join("read_exr.py");
-    let out = Command::new("python3").arg(&script).arg(path).output();
+/// Runs a Python helper script from `tests/` (exit status 2 there means a
+/// package is missing). Returns `None` with a printed notice when Python or
+/// the package is missing, except under CI (`CI=true`), where that fails.
+pub fn python(script: &str, args: &[&Path]) -> Option<Output> {
+    let script = root().join("tests").join(script);
+    let out = Command::new("python3").arg(&script).args(args).output();
     let in_ci = std::env::var("CI").is_ok_and(|v| v == "true" || v == "1");
-    let out = match out {
-        Ok(o) if o.status.success() => o,
+    match out {
+        Ok(o) if o.status.success() => Some(o),
         Ok(o) if o.status.code() == Some(2) || o.status.code() == Some(127) => {
-            assert!(!in_ci, "CI=true but Python's OpenEXR package is missing: {}", String::from_utf8_lossy(&o.stderr));
-            eprintln!("notice: skipping the independent EXR check (python3 -m pip install OpenEXR numpy)");
-            return None;
+            assert!(!in_ci, "CI=true but a Python package is missing: {}", String::from_utf8_lossy(&o.stderr));
+            eprintln!(
+                "notice: skipping a check that needs Python packages ({}); python3 -m pip install OpenEXR numpy jsonschema",
+                String::from_utf8_lossy(&o.stderr).trim()
+            );
+            None
         }
-        Ok(o) => panic!("read_exr.py failed on {}:\n{}", path.display(), text(&o)),
+        Ok(o) => panic!("{} failed:\n{}", script.display(), text(&o)),
         Err(e) => {
             assert!(!in_ci, "CI=true but python3 cannot run: {e}");
-            eprintln!("notice: skipping the independent EXR check (no python3: {e})");
-            return None;
+            eprintln!("notice: skipping a check that needs python3 ({e})");
+            None
         }
-    };
+    }
+}
+
+/// Reads an EXR file with the Python `OpenEXR` package (the reference
+/// implementation's bindings), independent of the `exr` crate that wrote it;
+/// `None` if that is not installed (see [`python`]).
+pub fn read_exr(path: &Path) -> Option<Exr> {
+    let out = python("read_exr.py", &[path])?;
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let channels = v["channels"]
         .as_object()

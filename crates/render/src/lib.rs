@@ -44,10 +44,35 @@ pub fn load(path: &Path) -> Result<scene::World, Error> {
 }
 
 /// The JSON Schema (draft-07) of the scene format, pretty-printed.
+///
+/// Generated from the serde types, plus the two rules the types cannot
+/// express: an object has exactly one shape key, and a `blocks` entry is
+/// either a block (`objects`) or a group (`group` and `blocks`).
 pub fn schema_json() -> String {
     let schema = schemars::schema_for!(scene::SceneFile);
-    // Serialising a schema (plain maps and strings) cannot fail.
-    let mut s = serde_json::to_string_pretty(&schema).unwrap_or_default();
+    let mut value = serde_json::to_value(&schema).unwrap_or_default();
+    let one_of = |alternatives: &[&[&str]]| {
+        serde_json::Value::Array(alternatives.iter().map(|keys| serde_json::json!({ "required": keys })).collect())
+    };
+    if let Some(defs) = value.get_mut("definitions").and_then(|d| d.as_object_mut()) {
+        if let Some(obj) = defs.get_mut("ObjectSpec").and_then(|o| o.as_object_mut()) {
+            let shapes: Vec<&[&str]> = vec![
+                &["sphere"],
+                &["cylinder"],
+                &["cone"],
+                &["paraboloid"],
+                &["hyperboloid"],
+                &["quadric"],
+                &["halfspace"],
+            ];
+            obj.insert("oneOf".into(), one_of(&shapes));
+        }
+        if let Some(entry) = defs.get_mut("Entry").and_then(|o| o.as_object_mut()) {
+            entry.insert("oneOf".into(), one_of(&[&["objects"], &["group", "blocks"]]));
+        }
+    }
+    // Serialising a JSON value cannot fail.
+    let mut s = serde_json::to_string_pretty(&value).unwrap_or_default();
     s.push('\n');
     s
 }
