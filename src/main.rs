@@ -44,6 +44,9 @@ enum Command {
         /// Worker threads [default: one per core].
         #[arg(long, value_name = "N")]
         threads: Option<usize>,
+        /// Anti-aliasing: an N×N grid of rays per pixel (overrides settings.samples).
+        #[arg(long, value_name = "N")]
+        samples: Option<u32>,
         /// Write the colour channels as 16-bit half floats.
         #[arg(long)]
         half: bool,
@@ -91,8 +94,14 @@ fn triple(v: &[f64]) -> [f64; 3] {
 
 fn run(command: Command) -> Result<(), Error> {
     match command {
-        Command::Render { scene, output, png, width, height, threads, half, exposure } => {
+        Command::Render { scene, output, png, width, height, threads, samples, half, exposure } => {
             let mut world = render::load(&scene)?;
+            if let Some(n) = samples {
+                if !(1..=16).contains(&n) {
+                    return Err(Error::Options(format!("--samples must be between 1 and 16, got {n}")));
+                }
+                world.settings.samples = n;
+            }
             let cam = world.camera;
             let (w0, h0) = (f64::from(cam.width()), f64::from(cam.height()));
             let size = match (width, height) {

@@ -264,3 +264,31 @@ fn index_one_glass_is_invisible() {
     }
     assert!(through > 50, "only {through} pixels look through the invisible block");
 }
+
+#[test]
+fn samples_average_colour_and_coverage_but_keep_centre_aovs() {
+    // Flat colours: a pure-ambient ball on a background. With 4×4 samples
+    // every pixel is the coverage-weighted mix of the two colours.
+    let json = r#"{ "camera": { "eye": [0, 0, 4], "direction": [0, 0, -1], "width": 24, "height": 18 },
+                    "settings": { "ambient": [1, 1, 1], "background": [0, 0.5, 1], "samples": 4 },
+                    "materials": { "flat": { "ambient": [1, 0.25, 0] } },
+                    "blocks": [ { "material": "flat", "objects": [ { "sphere": {} } ] } ] }"#;
+    let dir = tempdir();
+    let aa = rendered(dir.path(), &write_scene(dir.path(), "aa.json", json));
+    let one =
+        rendered(dir.path(), &write_scene(dir.path(), "one.json", &json.replace(r#""samples": 4"#, r#""samples": 1"#)));
+    let mut partial = 0;
+    for i in 0..18 {
+        for j in 0..24 {
+            let a = aa.at("A", i, j);
+            assert_eq!(a * 16.0, (a * 16.0).round(), "coverage {a} is not k/16");
+            partial += usize::from(a > 0.0 && a < 1.0);
+            let want = add(mul(a, [1.0, 0.25, 0.0]), mul(1.0 - a, [0.0, 0.5, 1.0]));
+            close(rgb(&aa, i, j), want, &format!("pixel ({i},{j}), coverage {a}"));
+            for ch in ["Z", "N.X", "N.Y", "N.Z", "id.block", "id.object"] {
+                assert_eq!(aa.at(ch, i, j), one.at(ch, i, j), "{ch} at ({i},{j})");
+            }
+        }
+    }
+    assert!(partial > 10, "{partial} edge pixels");
+}

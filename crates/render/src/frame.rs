@@ -2,6 +2,7 @@
 
 use std::time::{Duration, Instant};
 
+use quadric::nalgebra::Vector3;
 use rayon::prelude::*;
 
 use crate::error::Error;
@@ -13,7 +14,8 @@ use crate::shade::{Scratch, Shader};
 pub struct Pixel {
     /// Linear RGB.
     pub rgb: [f32; 3],
-    /// Coverage: 1 where the primary ray hit a block, else 0.
+    /// Coverage: the fraction of the pixel's samples that hit a block (with
+    /// one sample per pixel: 1 on a hit, 0 on a miss).
     pub alpha: f32,
     /// Distance along the primary ray, `+∞` on a miss.
     pub depth: f32,
@@ -98,16 +100,37 @@ fn render_row(world: &World, i: u32) -> (Vec<Pixel>, u64) {
     let shader = Shader::new(world);
     let mut scratch = Scratch::default();
     let cam = &world.camera;
+    let n = world.settings.samples.max(1);
     let row = (0..cam.width())
         .map(|j| {
+            // The AOVs always come from the ray through the pixel centre (SPEC §4).
             let ray = cam.ray(i, j);
-            let (c, hit) = shader.primary(&ray, &mut scratch);
+            let (mut c, hit) = shader.primary(&ray, &mut scratch);
+            let mut alpha = if hit.is_some() { 1.0 } else { 0.0 };
+            if n > 1 {
+                // n×n stratified grid of sub-pixel positions; colour and coverage are their means.
+                c = Vector3::zeros();
+                let mut covered = 0u32;
+                for a in 0..n {
+                    for b in 0..n {
+                        let di = (f64::from(a) + 0.5) / f64::from(n) - 0.5;
+                        let dj = (f64::from(b) + 0.5) / f64::from(n) - 0.5;
+                        let sub = cam.ray_at(f64::from(i) + di, f64::from(j) + dj);
+                        let (cs, h) = shader.primary(&sub, &mut scratch);
+                        c += cs;
+                        covered += u32::from(h.is_some());
+                    }
+                }
+                let count = f64::from(n * n);
+                c /= count;
+                alpha = (f64::from(covered) / count) as f32;
+            }
             let rgb = [c.x as f32, c.y as f32, c.z as f32];
             match hit {
-                None => Pixel { rgb, depth: f32::INFINITY, ..Pixel::default() },
+                None => Pixel { rgb, alpha, depth: f32::INFINITY, ..Pixel::default() },
                 Some(s) => Pixel {
                     rgb,
-                    alpha: 1.0,
+                    alpha,
                     depth: s.t as f32,
                     normal: [s.normal.x as f32, s.normal.y as f32, s.normal.z as f32],
                     block: s.block.0 + 1,

@@ -98,6 +98,10 @@ pub struct Settings {
     /// Whether lights cast shadows.
     #[serde(default = "default_true")]
     pub shadows: bool,
+    /// Anti-aliasing: `n` gives an `n × n` grid of rays per pixel whose
+    /// colours are averaged (default 1: one ray through the pixel centre).
+    #[serde(default = "default_samples")]
+    pub samples: u32,
 }
 
 impl Default for Settings {
@@ -108,6 +112,7 @@ impl Default for Settings {
             max_depth: default_max_depth(),
             epsilon: None,
             shadows: true,
+            samples: default_samples(),
         }
     }
 }
@@ -117,6 +122,9 @@ fn default_ambient() -> Triple {
 }
 fn default_max_depth() -> u32 {
     5
+}
+fn default_samples() -> u32 {
+    1
 }
 fn default_true() -> bool {
     true
@@ -465,6 +473,13 @@ impl SceneFile {
             if !(e.is_finite() && e >= 0.0) {
                 return Err(SceneError::semantic("settings.epsilon", format!("must be finite and >= 0, got {e}")));
             }
+        }
+
+        if !(1..=16).contains(&s.samples) {
+            return Err(SceneError::semantic(
+                "settings.samples",
+                format!("must be between 1 and 16, got {}", s.samples),
+            ));
         }
 
         let mut lights = Vec::with_capacity(self.lights.len());
