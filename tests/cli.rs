@@ -100,3 +100,19 @@ fn scenes_validate_against_the_schema_and_bad_ones_do_not() {
         assert!(line.starts_with("invalid "), "the schema accepts {json}");
     }
 }
+
+#[test]
+fn complete_examples_in_the_format_docs_load() {
+    let doc = std::fs::read_to_string(root().join("docs/scene-format.md")).unwrap();
+    let blocks: Vec<&str> = doc.split("```json\n").skip(1).filter_map(|b| b.split("\n```").next()).collect();
+    // Whole documents start at the top-level brace; the rest are fragments.
+    let complete: Vec<&str> =
+        blocks.iter().copied().filter(|b| b.starts_with('{') && b.contains("\"camera\"")).collect();
+    assert!(complete.len() >= 6, "found {} complete examples", complete.len());
+    let dir = tempdir();
+    for (i, json) in complete.iter().enumerate() {
+        let p = write_scene(dir.path(), &format!("example{i}.json"), json);
+        let o = komplex(dir.path(), &["render", p.to_str().unwrap(), "--width", "16", "--height", "12"]);
+        assert!(o.status.success(), "example {i} of docs/scene-format.md:\n{json}\n{}", text(&o));
+    }
+}
