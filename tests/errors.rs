@@ -69,7 +69,7 @@ fn semantic_errors_name_the_block_and_object() {
         &format!(
             r#"{{ {CAMERA}, "materials": {{ "oak": {{}} }}, "blocks": [ {{ "name": "top", "material": "oka", "objects": [ {{ "sphere": {{}} }} ] }} ] }}"#
         ),
-        &["blocks[0].material", "block \"top\"", "unknown material \"oka\"", "did you mean \"oak\"?"],
+        &["blocks[0].material, line 1, column ", "block \"top\"", "unknown material \"oka\"", "did you mean \"oak\"?"],
     );
     check(
         &blocks(
@@ -78,6 +78,11 @@ fn semantic_errors_name_the_block_and_object() {
         &["blocks[0].objects[1].transform[0]", "block \"leg\", object 2", "singular"],
     );
     check(&blocks(r#"{ "name": "void", "objects": [] }"#), &["blocks[0]", "block \"void\" is empty"]);
+    // Semantic errors point at the line and column of the offending value too.
+    check(
+        "{\n  \"camera\": { \"eye\": [0, 0, 5], \"direction\": [0, 0, -1] },\n  \"blocks\": [\n    { \"name\": \"a\", \"objects\": [ { \"sphere\": {} },\n      { \"cone\": {}, \"transform\": [ { \"scale\": 0 } ] } ] } ] }",
+        &["blocks[0].objects[1].transform[0], line 5, column 36", "block \"a\", object 2", "singular"],
+    );
     check(
         &blocks(r#"{ "name": "two", "objects": [ { "sphere": {}, "cone": {} } ] }"#),
         &["blocks[0].objects[0]", "exactly one shape key", "sphere, cone"],

@@ -20,13 +20,19 @@ pub enum SceneError {
         message: String,
     },
     /// The JSON is well-formed but means nothing valid.
-    #[error("{place}: {message}")]
+    #[error("{place}{}: {message}", position_suffix(position))]
     Semantic {
         /// JSON path (and block/object name in `message`).
         place: String,
+        /// 1-based line and column of the value at `place`, when known.
+        position: Option<(usize, usize)>,
         /// What is wrong.
         message: String,
     },
+}
+
+fn position_suffix(position: &Option<(usize, usize)>) -> String {
+    position.map(|(l, c)| format!(", line {l}, column {c}")).unwrap_or_default()
 }
 
 fn path_prefix(path: &str) -> String {
@@ -40,14 +46,25 @@ fn path_prefix(path: &str) -> String {
 impl SceneError {
     /// A semantic error at `place`.
     pub fn semantic(place: &str, message: impl Into<String>) -> Self {
-        SceneError::Semantic { place: place.to_string(), message: message.into() }
+        SceneError::Semantic { place: place.to_string(), position: None, message: message.into() }
     }
 
     /// Prefixes the message of a semantic error with the owner (`block "x", object 2`).
     pub(crate) fn with_owner(self, owner: &str) -> Self {
         match self {
-            SceneError::Semantic { place, message } => {
-                SceneError::Semantic { place, message: format!("{owner}: {message}") }
+            SceneError::Semantic { place, position, message } => {
+                SceneError::Semantic { place, position, message: format!("{owner}: {message}") }
+            }
+            other => other,
+        }
+    }
+
+    /// Adds the line and column of a semantic error's place in `text`.
+    pub(crate) fn located(self, text: &str) -> Self {
+        match self {
+            SceneError::Semantic { place, position: None, message } => {
+                let position = crate::locate::locate(text, &place);
+                SceneError::Semantic { place, position, message }
             }
             other => other,
         }

@@ -25,6 +25,7 @@ pub mod check;
 mod error;
 pub mod exr;
 pub mod frame;
+mod locate;
 mod output;
 pub mod png;
 pub mod scene;
@@ -38,9 +39,7 @@ pub use error::{nearest, Error, SceneError};
 /// Reads and converts a scene file.
 pub fn load(path: &Path) -> Result<scene::World, Error> {
     let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
-    let file =
-        scene::SceneFile::from_json(&text).map_err(|source| Error::Scene { file: path.to_path_buf(), source })?;
-    file.to_world().map_err(|source| Error::Scene { file: path.to_path_buf(), source })
+    scene::SceneFile::load_str(&text).map_err(|source| Error::Scene { file: path.to_path_buf(), source })
 }
 
 /// The JSON Schema (draft-07) of the scene format, pretty-printed.

@@ -456,6 +456,12 @@ impl SceneFile {
         Ok(scene)
     }
 
+    /// Parses and converts a scene; every error carries its place with a
+    /// line and column.
+    pub fn load_str(text: &str) -> Result<World, SceneError> {
+        Self::from_json(text)?.to_world().map_err(|e| e.located(text))
+    }
+
     /// Resolves names, composes transforms and builds the complex.
     pub fn to_world(&self) -> Result<World, SceneError> {
         let c = &self.camera;
