@@ -120,6 +120,11 @@ fn bad_cameras_and_settings() {
     check(&scene(r#"{ "eye": [0, 0, 5], "direction": [0, 0, -1], "width": 0 }"#, "{}"), &["camera", "empty"]);
     check(&scene(r#"{ "eye": [0, 0, 5], "direction": [0, 0, -1] }"#, r#"{ "epsilon": -1 }"#), &["settings.epsilon"]);
     check(&scene(r#"{ "eye": [0, 0, 5], "direction": [0, 0, -1], "width": -3 }"#, "{}"), &["camera.width", "line 1"]);
+    check(
+        &scene(r#"{ "eye": [0, 0, 5], "direction": [0, 0, -1], "width": 100000, "height": 100000 }"#, "{}"),
+        &["at most"],
+    );
+    check(&scene(r#"{ "eye": [0, 0, 5], "direction": [0, 0, -1] }"#, r#"{ "samples": 0 }"#), &["settings.samples"]);
 }
 
 #[test]

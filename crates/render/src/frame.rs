@@ -68,9 +68,19 @@ pub struct Options {
     pub threads: Option<usize>,
 }
 
+/// The largest image rendered (2^28 pixels, about 16k × 16k): the frame
+/// and the EXR channels are held in memory, about 40 bytes a pixel.
+pub const MAX_PIXELS: u64 = 1 << 28;
+
 /// Renders `world` with its camera. `progress` is called once per finished
 /// row (from worker threads).
 pub fn render(world: &World, options: Options, progress: &(dyn Fn() + Sync)) -> Result<(Frame, Stats), Error> {
+    let pixels = u64::from(world.camera.width()) * u64::from(world.camera.height());
+    if pixels > MAX_PIXELS {
+        return Err(Error::Options(format!(
+            "the image has {pixels} pixels; at most {MAX_PIXELS} are supported (about 16k x 16k)"
+        )));
+    }
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(n) = options.threads {
         if n == 0 {

@@ -132,7 +132,7 @@ pub(crate) fn locate(text: &str, path: &str) -> Option<(usize, usize)> {
         s.descend(&seg)?;
     }
     s.ws();
-    let before = &text[..s.pos.min(text.len())];
+    let before = text.get(..s.pos.min(text.len()))?;
     let line = before.matches('\n').count() + 1;
     let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
     Some((line, column))
