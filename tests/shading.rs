@@ -292,3 +292,105 @@ fn samples_average_colour_and_coverage_but_keep_centre_aovs() {
     }
     assert!(partial > 10, "{partial} edge pixels");
 }
+
+/// Along `e + t d`, 0 < t < len: the owners of the pieces inside two
+/// transparent balls (the first has priority), in order, as `0` or `1`,
+/// with `None` when a boundary is too close to call.
+fn owners_along(e: V, d: V, len: f64, balls: &[(V, f64); 2]) -> Option<Vec<usize>> {
+    let mut cuts = vec![0.0, len];
+    let mut spans = [None, None];
+    for (k, (c, r)) in balls.iter().enumerate() {
+        if let Some((a, b)) = sphere_span(e, d, *c, *r).ok()? {
+            for t in [a, b] {
+                if (t - 0.0).abs() < 1e-6 || (t - len).abs() < 1e-6 {
+                    return None;
+                }
+                if t > 0.0 && t < len {
+                    cuts.push(t);
+                }
+            }
+            spans[k] = Some((a, b));
+        }
+    }
+    cuts.sort_by(f64::total_cmp);
+    if cuts.windows(2).any(|w| w[1] - w[0] < 1e-6) {
+        return None;
+    }
+    let mut owners: Vec<Option<usize>> = cuts
+        .windows(2)
+        .map(|w| {
+            let m = 0.5 * (w[0] + w[1]);
+            (0..2).find(|k| spans[*k].is_some_and(|(a, b)| a < m && m < b))
+        })
+        .collect();
+    owners.dedup();
+    Some(owners.into_iter().map(|o| o.map_or(9, |k| k)).collect())
+}
+
+/// Two overlapping transparent balls over a floor. A shadow ray is
+/// attenuated once per passage through a medium: through two balls of the
+/// same material in one go, once; through two different materials, once each.
+fn two_ball_shadow(same: bool) {
+    let cam = Cam { e: [0.0, 4.0, 5.0], d: [0.0, -4.0, -5.0], u: [0.0, 1.0, 0.0], w: 48, h: 36, angle: 50.0 };
+    let e = cam.e;
+    let light = [0.2, 6.0, 0.1];
+    let balls = [([-0.35, 1.5, 0.0], 0.6), ([0.35, 1.5, 0.0], 0.6)];
+    let t = [0.5, 0.5, 0.5];
+    let (m1, m2) = if same { ("tint", "tint") } else { ("tint", "tint2") };
+    let cam_json = cam.json();
+    let json = format!(
+        r#"{{ {cam_json}, "settings": {{ "ambient": [0, 0, 0] }}, "lights": [ {{ "position": {light:?} }} ],
+             "materials": {{ "floor": {{ "diffuse": [1, 1, 1] }}, "tint": {{ "transmit": {t:?} }}, "tint2": {{ "transmit": {t:?} }} }},
+             "blocks": [ {{ "name": "floor", "material": "floor", "objects": [ {{ "halfspace": [0, 1, 0, 0] }}, {{ "halfspace": [0, -1, 0, -1] }} ] }},
+                         {{ "name": "a", "material": "{m1}", "transparent": true, "objects": [ {{ "sphere": {{ "radius": 0.6, "center": {:?} }} }} ] }},
+                         {{ "name": "b", "material": "{m2}", "transparent": true, "objects": [ {{ "sphere": {{ "radius": 0.6, "center": {:?} }} }} ] }} ] }}"#,
+        balls[0].0, balls[1].0
+    );
+    let dir = tempdir();
+    let img = rendered(dir.path(), &write_scene(dir.path(), "two.json", &json));
+    let mut seen = [0usize; 3];
+    for i in 0..cam.h {
+        for j in 0..cam.w {
+            let ray = cam.ray(i, j);
+            if ray[1] >= 0.0 || balls.iter().any(|(c, r)| !matches!(sphere_span(e, ray, *c, *r), Ok(None))) {
+                continue;
+            }
+            let x = add(e, mul(-e[1] / ray[1], ray));
+            let to_light = sub(light, x);
+            let dist = dot(to_light, to_light).sqrt();
+            let l = unit(to_light);
+            let Some(owners) = owners_along(x, l, dist, &balls) else { continue };
+            // Passages: maximal runs inside the balls; with one material a
+            // run counts once, with two each owner change inside a run counts.
+            let mut factors = 0i32;
+            let mut previous: Option<usize> = None;
+            for o in owners {
+                if o == 9 {
+                    previous = None;
+                    continue;
+                }
+                if previous.is_none() || !same {
+                    factors += 1;
+                }
+                previous = Some(o);
+            }
+            seen[factors.min(2) as usize] += 1;
+            let want = mul(l[1] * 0.5f64.powi(factors), [1.0, 1.0, 1.0]);
+            close(rgb(&img, i as usize, j as usize), want, &format!("floor pixel ({i},{j}), {factors} passages"));
+        }
+    }
+    // Open floor and single passages always occur; two factors only where
+    // the materials differ (the light is above the overlap, so no shadow
+    // ray passes the two balls separately).
+    assert!(seen[0] > 5 && seen[1] > 5 && (same || seen[2] > 5), "cases seen: {seen:?}");
+}
+
+#[test]
+fn one_medium_attenuates_a_shadow_once() {
+    two_ball_shadow(true);
+}
+
+#[test]
+fn two_media_attenuate_a_shadow_once_each() {
+    two_ball_shadow(false);
+}
