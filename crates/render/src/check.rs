@@ -106,10 +106,15 @@ pub fn check(world: &World) -> Report {
 
 impl fmt::Display for Report {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let n = |count: usize, what: &str| format!("{count} {what}{}", if count == 1 { "" } else { "s" });
         writeln!(
             f,
-            "{} blocks ({} transparent), {} solids, {} lights, {} materials",
-            self.blocks, self.transparent, self.solids, self.lights, self.materials
+            "{} ({} transparent), {}, {}, {}",
+            n(self.blocks, "block"),
+            self.transparent,
+            n(self.solids, "solid"),
+            n(self.lights, "light"),
+            n(self.materials, "material")
         )?;
         match self.bounds {
             Some((lo, hi)) => writeln!(f, "bounds: {lo:?} .. {hi:?}")?,
