@@ -21,6 +21,18 @@ use crate::error::SceneError;
 pub type Triple = [f64; 3];
 
 /// The whole scene document.
+///
+/// ```
+/// use render::scene::SceneFile;
+/// let text = r#"{ "camera": { "eye": [0, 0, 4], "direction": [0, 0, -1] },
+///                 "blocks": [ { "name": "ball", "objects": [ { "sphere": {} } ] } ] }"#;
+/// let world = SceneFile::load_str(text).unwrap();
+/// assert_eq!(world.complex.blocks()[0].name(), "ball");
+///
+/// let typo = text.replace("\"sphere\"", "\"spehre\"");
+/// let err = SceneFile::load_str(&typo).unwrap_err().to_string();
+/// assert!(err.contains("blocks[0].objects[0].spehre") && err.contains("did you mean `sphere`?"), "{err}");
+/// ```
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
