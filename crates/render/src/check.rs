@@ -1,0 +1,129 @@
+//! `komplex check`: a summary of a valid scene and warnings about things
+//! that are allowed but probably not meant.
+
+use std::fmt;
+
+use complex::BlockId;
+use quadric::nalgebra::Vector3;
+
+use crate::scene::World;
+
+/// What `check` found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Report {
+    /// Number of blocks.
+    pub blocks: usize,
+    /// Number of solids over all blocks.
+    pub solids: usize,
+    /// Number of transparent blocks.
+    pub transparent: usize,
+    /// Number of lights.
+    pub lights: usize,
+    /// Number of named materials.
+    pub materials: usize,
+    /// Box of the bounded blocks, `None` if none is bounded.
+    pub bounds: Option<([f64; 3], [f64; 3])>,
+    /// The fault tolerance ε in use.
+    pub epsilon: f64,
+    /// Image size.
+    pub size: (u32, u32),
+    /// Warnings, one line each.
+    pub warnings: Vec<String>,
+}
+
+/// Summarises `world` and collects warnings.
+pub fn check(world: &World) -> Report {
+    let complex = &world.complex;
+    let mut warnings = Vec::new();
+    let mut bounds: Option<([f64; 3], [f64; 3])> = None;
+    // A kernel without bounds reports every block as infinite; warning about
+    // each block then says nothing, so warn per block only when the kernel
+    // bounds at least one.
+    let kernel_bounds = (0..complex.blocks().len()).any(|i| complex.block_aabb(BlockId(i as u32)).is_bounded());
+    for (i, b) in complex.blocks().iter().enumerate() {
+        let id = BlockId(i as u32);
+        let aabb = complex.block_aabb(id);
+        if aabb.is_bounded() {
+            let (lo, hi) = bounds.unwrap_or(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]));
+            bounds = Some(([0, 1, 2].map(|k| lo[k].min(aabb.min[k])), [0, 1, 2].map(|k| hi[k].max(aabb.max[k]))));
+        } else if kernel_bounds {
+            warnings.push(format!("block {} \"{}\" ({}) may be unbounded", i + 1, b.name(), world.blocks[i].path));
+        }
+        if b.is_transparent() {
+            let m = world.block_material(id);
+            if m.transmit == Vector3::zeros() {
+                warnings.push(format!(
+                    "block {} \"{}\" is transparent but its material \"{}\" has transmit 0",
+                    i + 1,
+                    b.name(),
+                    m.name
+                ));
+            }
+        }
+    }
+    let eye = world.camera.eye();
+    if let Some(id) = complex.contains_point(&eye) {
+        let b = complex.block(id);
+        let kind = if b.is_transparent() { "transparent" } else { "opaque" };
+        warnings.push(format!("the eye lies inside {kind} block {} \"{}\"", id.0 + 1, b.name()));
+    }
+    for (k, l) in world.lights.iter().enumerate() {
+        if let Some(id) = complex.contains_point(&l.position) {
+            if !complex.block(id).is_transparent() {
+                warnings.push(format!(
+                    "light {} lies inside opaque block {} \"{}\" and lights nothing",
+                    k + 1,
+                    id.0 + 1,
+                    complex.block(id).name()
+                ));
+            }
+        }
+    }
+    if world.lights.is_empty() {
+        warnings.push("the scene has no lights: only ambient light, reflection and refraction".into());
+    }
+    let used: Vec<bool> = (0..world.materials.len())
+        .map(|m| world.blocks.iter().any(|b| b.material == m || b.solid_materials.contains(&m)))
+        .collect();
+    // The last material is the built-in default.
+    for (m, mat) in world.materials.iter().enumerate().take(world.materials.len() - 1) {
+        if !used[m] {
+            warnings.push(format!("material \"{}\" is not used", mat.name));
+        }
+    }
+    Report {
+        blocks: complex.blocks().len(),
+        solids: complex.blocks().iter().map(|b| b.solids().len()).sum(),
+        transparent: complex.blocks().iter().filter(|b| b.is_transparent()).count(),
+        lights: world.lights.len(),
+        materials: world.materials.len() - 1,
+        bounds,
+        epsilon: complex.epsilon(),
+        size: (world.camera.width(), world.camera.height()),
+        warnings,
+    }
+}
+
+impl fmt::Display for Report {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let n = |count: usize, what: &str| format!("{count} {what}{}", if count == 1 { "" } else { "s" });
+        writeln!(
+            f,
+            "{} ({} transparent), {}, {}, {}",
+            n(self.blocks, "block"),
+            self.transparent,
+            n(self.solids, "solid"),
+            n(self.lights, "light"),
+            n(self.materials, "material")
+        )?;
+        match self.bounds {
+            Some((lo, hi)) => writeln!(f, "bounds: {lo:?} .. {hi:?}")?,
+            None => writeln!(f, "bounds: unknown (the kernel gives no block a finite box)")?,
+        }
+        writeln!(f, "image: {}x{}, epsilon {:e}", self.size.0, self.size.1, self.epsilon)?;
+        for w in &self.warnings {
+            writeln!(f, "warning: {w}")?;
+        }
+        Ok(())
+    }
+}

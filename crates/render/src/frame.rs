@@ -1,0 +1,153 @@
+//! The render loop: one ray per pixel centre, rows in parallel.
+
+use std::time::{Duration, Instant};
+
+use quadric::nalgebra::Vector3;
+use rayon::prelude::*;
+
+use crate::error::Error;
+use crate::scene::World;
+use crate::shade::{Scratch, Shader};
+
+/// One pixel of every output channel.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Pixel {
+    /// Linear RGB.
+    pub rgb: [f32; 3],
+    /// Coverage: the fraction of the pixel's samples that hit a block (with
+    /// one sample per pixel: 1 on a hit, 0 on a miss).
+    pub alpha: f32,
+    /// Distance along the primary ray, `+∞` on a miss.
+    pub depth: f32,
+    /// World-space unit normal facing the camera, zero on a miss.
+    pub normal: [f32; 3],
+    /// 1-based block index in priority order, 0 on a miss.
+    pub block: u32,
+    /// 1-based solid index within the block, 0 on a miss.
+    pub object: u32,
+}
+
+/// A rendered image, row-major from the top-left pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width * height` pixels, row by row, top row first.
+    pub pixels: Vec<Pixel>,
+}
+
+impl Frame {
+    /// The pixel in row `i` (from the top) and column `j`.
+    pub fn at(&self, i: u32, j: u32) -> &Pixel {
+        &self.pixels[i as usize * self.width as usize + j as usize]
+    }
+}
+
+/// How a render went.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stats {
+    /// Rays cast: primary, shadow, reflected and refracted.
+    pub rays: u64,
+    /// Wall-clock time of the render loop.
+    pub elapsed: Duration,
+}
+
+impl Stats {
+    /// Rays per second.
+    pub fn rays_per_second(&self) -> f64 {
+        self.rays as f64 / self.elapsed.as_secs_f64().max(1e-9)
+    }
+}
+
+/// Render options beyond the scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Options {
+    /// Worker threads (default: one per core).
+    pub threads: Option<usize>,
+}
+
+/// The largest image rendered (2^28 pixels, about 16k × 16k): the frame
+/// and the EXR channels are held in memory, about 40 bytes a pixel.
+pub const MAX_PIXELS: u64 = 1 << 28;
+
+/// Renders `world` with its camera. `progress` is called once per finished
+/// row (from worker threads).
+pub fn render(world: &World, options: Options, progress: &(dyn Fn() + Sync)) -> Result<(Frame, Stats), Error> {
+    let pixels = u64::from(world.camera.width()) * u64::from(world.camera.height());
+    if pixels > MAX_PIXELS {
+        return Err(Error::Options(format!(
+            "the image has {pixels} pixels; at most {MAX_PIXELS} are supported (about 16k x 16k)"
+        )));
+    }
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = options.threads {
+        if n == 0 {
+            return Err(Error::Options("--threads must be at least 1".into()));
+        }
+        builder = builder.num_threads(n);
+    }
+    let pool = builder.build().map_err(|e| Error::Options(format!("cannot start worker threads: {e}")))?;
+    let start = Instant::now();
+    let (rows, rays): (Vec<Vec<Pixel>>, Vec<u64>) = pool.install(|| {
+        (0..world.camera.height())
+            .into_par_iter()
+            .map(|i| {
+                let row = render_row(world, i);
+                progress();
+                row
+            })
+            .unzip()
+    });
+    let elapsed = start.elapsed();
+    let pixels = rows.into_iter().flatten().collect();
+    let frame = Frame { width: world.camera.width(), height: world.camera.height(), pixels };
+    Ok((frame, Stats { rays: rays.iter().sum(), elapsed }))
+}
+
+fn render_row(world: &World, i: u32) -> (Vec<Pixel>, u64) {
+    let shader = Shader::new(world);
+    let mut scratch = Scratch::default();
+    let cam = &world.camera;
+    let n = world.settings.samples.max(1);
+    let row = (0..cam.width())
+        .map(|j| {
+            // The AOVs always come from the ray through the pixel centre (SPEC §4).
+            let ray = cam.ray(i, j);
+            let (mut c, hit) = shader.primary(&ray, &mut scratch);
+            let mut alpha = if hit.is_some() { 1.0 } else { 0.0 };
+            if n > 1 {
+                // n×n stratified grid of sub-pixel positions; colour and coverage are their means.
+                c = Vector3::zeros();
+                let mut covered = 0u32;
+                for a in 0..n {
+                    for b in 0..n {
+                        let di = (f64::from(a) + 0.5) / f64::from(n) - 0.5;
+                        let dj = (f64::from(b) + 0.5) / f64::from(n) - 0.5;
+                        let sub = cam.ray_at(f64::from(i) + di, f64::from(j) + dj);
+                        let (cs, h) = shader.primary(&sub, &mut scratch);
+                        c += cs;
+                        covered += u32::from(h.is_some());
+                    }
+                }
+                let count = f64::from(n * n);
+                c /= count;
+                alpha = (f64::from(covered) / count) as f32;
+            }
+            let rgb = [c.x as f32, c.y as f32, c.z as f32];
+            match hit {
+                None => Pixel { rgb, alpha, depth: f32::INFINITY, ..Pixel::default() },
+                Some(s) => Pixel {
+                    rgb,
+                    alpha,
+                    depth: s.t as f32,
+                    normal: [s.normal.x as f32, s.normal.y as f32, s.normal.z as f32],
+                    block: s.block.0 + 1,
+                    object: s.solid + 1,
+                },
+            }
+        })
+        .collect();
+    (row, scratch.rays)
+}

@@ -1,0 +1,274 @@
+//! Whitted-style shading (SPEC §5): ambient, Phong or Blinn-Phong per
+//! visible light, shadow rays, mirror reflection and Snell refraction with
+//! the media taken from the ray's partition.
+//!
+//! Scenes pay only for what they use: without transparent blocks the first
+//! hit comes from [`Complex::cast_ray`] and shadow rays stop at the first
+//! blocker; the partition is only formed when some block is transparent.
+
+use complex::{BlockId, Complex, Partition};
+use quadric::nalgebra::{Point3, Vector3};
+use quadric::normal::facing;
+use quadric::Ray;
+
+use crate::scene::{Material, Model, World};
+
+/// Colours are linear RGB in `f64` while shading.
+pub type Rgb = Vector3<f64>;
+
+/// What the primary ray saw, for the AOVs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    /// Distance along the ray.
+    pub t: f64,
+    /// World-space unit normal facing the camera (zero where undefined).
+    pub normal: Vector3<f64>,
+    /// The block hit (0-based).
+    pub block: BlockId,
+    /// The solid within the block (0-based).
+    pub solid: u32,
+}
+
+/// The first visible surface event along a ray.
+#[derive(Clone, Copy, Debug)]
+struct Event {
+    t: f64,
+    point: Point3<f64>,
+    /// Outward normal of the surface's block.
+    normal: Vector3<f64>,
+    block: BlockId,
+    solid: u32,
+    /// Owner of the ray just before and just after the event.
+    before: Option<BlockId>,
+    after: Option<BlockId>,
+}
+
+/// Per-thread scratch space and counters.
+#[derive(Debug, Default)]
+pub struct Scratch {
+    partition: Partition,
+    /// Rays cast so far (primary, shadow, reflected, refracted).
+    pub rays: u64,
+}
+
+/// Shades rays against one world.
+#[derive(Clone, Copy, Debug)]
+pub struct Shader<'w> {
+    world: &'w World,
+    complex: &'w Complex,
+    eps: f64,
+    transparent: bool,
+}
+
+fn is_zero(c: &Rgb) -> bool {
+    c.iter().all(|x| *x == 0.0)
+}
+
+impl<'w> Shader<'w> {
+    /// A shader for `world`.
+    pub fn new(world: &'w World) -> Self {
+        let complex = &world.complex;
+        Shader { world, complex, eps: complex.epsilon(), transparent: complex.has_transparent() }
+    }
+
+    /// The colour seen along a primary ray and the surface it hit.
+    pub fn primary(&self, ray: &Ray, scratch: &mut Scratch) -> (Rgb, Option<Surface>) {
+        match self.first_event(ray, scratch) {
+            None => (self.background(), None),
+            Some(e) => {
+                let n = facing_normal(&e.normal, &ray.direction());
+                let surface = Surface { t: e.t, normal: n, block: e.block, solid: e.solid };
+                (self.shade(ray, &e, 0, scratch), Some(surface))
+            }
+        }
+    }
+
+    /// The colour seen along `ray` at recursion depth `depth`.
+    pub fn trace(&self, ray: &Ray, depth: u32, scratch: &mut Scratch) -> Rgb {
+        match self.first_event(ray, scratch) {
+            None => self.background(),
+            Some(e) => self.shade(ray, &e, depth, scratch),
+        }
+    }
+
+    fn background(&self) -> Rgb {
+        Vector3::from(self.world.settings.background)
+    }
+
+    /// The first event after ε where something visible happens. Events
+    /// between two transparent blocks of the same material are skipped:
+    /// they are one medium (SPEC §3).
+    fn first_event(&self, ray: &Ray, scratch: &mut Scratch) -> Option<Event> {
+        scratch.rays += 1;
+        if !self.transparent {
+            let h = self.complex.cast_ray(ray, f64::INFINITY)?;
+            let (before, after) = if h.entering { (None, Some(h.block)) } else { (Some(h.block), None) };
+            return Some(Event {
+                t: h.t,
+                point: h.point,
+                normal: h.normal,
+                block: h.block,
+                solid: h.solid,
+                before,
+                after,
+            });
+        }
+        self.complex.partition_into(ray, &mut scratch.partition);
+        scratch.partition.events.iter().find(|e| e.t > self.eps && !e.same_medium).map(|e| Event {
+            t: e.t,
+            point: e.point,
+            normal: e.normal,
+            block: e.surface.block,
+            solid: e.surface.solid,
+            before: e.before,
+            after: e.after,
+        })
+    }
+
+    /// The medium a segment owner stands for: `None` for empty space,
+    /// `Some(None)` for an opaque block, `Some(Some(m))` for a transparent one.
+    fn medium(&self, owner: Option<BlockId>) -> Option<Option<&'w Material>> {
+        let id = owner?;
+        let block = self.complex.block(id);
+        Some(block.is_transparent().then(|| self.world.block_material(id)))
+    }
+
+    fn ior(&self, owner: Option<BlockId>) -> Option<f64> {
+        match self.medium(owner) {
+            None => Some(1.0),
+            Some(Some(m)) => Some(m.ior),
+            // Light does not travel through an opaque block.
+            Some(None) => None,
+        }
+    }
+
+    fn shade(&self, ray: &Ray, e: &Event, depth: u32, scratch: &mut Scratch) -> Rgb {
+        let world = self.world;
+        let mat = world.surface_material(e.block, e.solid);
+        let v = -ray.direction();
+        let n = facing_normal(&e.normal, &ray.direction());
+        let ambient = Vector3::from(world.settings.ambient);
+        let mut c = mat.ambient.component_mul(&ambient);
+
+        let wants_diffuse = !is_zero(&mat.diffuse);
+        let wants_specular = !is_zero(&mat.specular);
+        if wants_diffuse || wants_specular {
+            for light in &world.lights {
+                let to_light = light.position - e.point;
+                let dist = to_light.norm();
+                if dist.is_nan() || dist <= 0.0 {
+                    continue;
+                }
+                let l = to_light / dist;
+                let nl = n.dot(&l);
+                if nl <= 0.0 {
+                    continue;
+                }
+                let pass = self.transmittance(&e.point, &l, dist, scratch);
+                if is_zero(&pass) {
+                    continue;
+                }
+                let mut lc = mat.diffuse.component_mul(&light.diffuse) * nl;
+                if wants_specular {
+                    let s = match mat.model {
+                        Model::Phong => (2.0 * nl * n - l).dot(&v),
+                        Model::BlinnPhong => {
+                            let h = l + v;
+                            let hn = h.norm();
+                            if hn > 0.0 {
+                                n.dot(&(h / hn))
+                            } else {
+                                0.0
+                            }
+                        }
+                    };
+                    if s > 0.0 {
+                        lc += mat.specular.component_mul(&light.specular) * s.powf(mat.shininess);
+                    }
+                }
+                c += lc.component_mul(&pass);
+            }
+        }
+
+        if depth >= world.settings.max_depth {
+            return c;
+        }
+        let cos_i = n.dot(&v);
+        let mut kr = mat.reflect;
+        if !is_zero(&mat.transmit) {
+            if let (Some(n1), Some(n2)) = (self.ior(e.before), self.ior(e.after)) {
+                let eta = n1 / n2;
+                let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+                if sin2_t > 1.0 {
+                    // Total internal reflection: the transmitted share is reflected.
+                    kr += mat.transmit;
+                } else {
+                    let dir = -eta * v + (eta * cos_i - (1.0 - sin2_t).sqrt()) * n;
+                    if let Ok(r) = Ray::new(e.point, dir) {
+                        c += mat.transmit.component_mul(&self.trace(&r, depth + 1, scratch));
+                    }
+                }
+            }
+        }
+        if !is_zero(&kr) {
+            let dir = 2.0 * cos_i * n - v;
+            if let Ok(r) = Ray::new(e.point, dir) {
+                c += kr.component_mul(&self.trace(&r, depth + 1, scratch));
+            }
+        }
+        c
+    }
+
+    /// How much light passes from `x` towards a light `dist` away along `l`:
+    /// zero if an opaque block is in the way, else the product of the
+    /// `transmit` of each transparent medium crossed (once per passage).
+    fn transmittance(&self, x: &Point3<f64>, l: &Vector3<f64>, dist: f64, scratch: &mut Scratch) -> Rgb {
+        let one = Vector3::repeat(1.0);
+        if !self.world.settings.shadows {
+            return one;
+        }
+        let Ok(ray) = Ray::new(*x, *l) else { return one };
+        scratch.rays += 1;
+        if !self.transparent {
+            return match self.complex.cast_ray(&ray, dist) {
+                Some(_) => Vector3::zeros(),
+                None => one,
+            };
+        }
+        self.complex.partition_into(&ray, &mut scratch.partition);
+        let mut pass = one;
+        let mut previous: Option<complex::MaterialKey> = None;
+        for s in &scratch.partition.segments {
+            if s.end <= self.eps || s.start >= dist {
+                continue;
+            }
+            match s.owner {
+                None => previous = None,
+                Some(id) => {
+                    let block = self.complex.block(id);
+                    if !block.is_transparent() {
+                        return Vector3::zeros();
+                    }
+                    if previous != Some(block.material()) {
+                        pass.component_mul_assign(&self.world.block_material(id).transmit);
+                        if is_zero(&pass) {
+                            return pass;
+                        }
+                    }
+                    previous = Some(block.material());
+                }
+            }
+        }
+        pass
+    }
+}
+
+/// The unit normal turned towards the viewer; `-dir` where the surface has
+/// no normal (a cone's apex), so shading stays finite.
+fn facing_normal(outward: &Vector3<f64>, dir: &Vector3<f64>) -> Vector3<f64> {
+    if outward.iter().all(|c| *c == 0.0) {
+        -dir
+    } else {
+        facing(*outward, dir)
+    }
+}

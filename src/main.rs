@@ -1,0 +1,179 @@
+//! `komplex`: the command line of the Komplex quadric-CSG ray caster.
+//!
+//! Thin by design: parse arguments, call the `render` crate, print, and map
+//! errors to exit codes (see docs/cli.md).
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use render::exr::ColorType;
+use render::Error;
+
+/// Exit status for an invalid scene or invalid option values.
+const EXIT_INPUT: u8 = 1;
+/// Exit status for I/O and encoding failures.
+const EXIT_IO: u8 = 3;
+
+#[derive(Parser)]
+#[command(name = "komplex", version, about = "Quadric-CSG ray caster: a JSON scene becomes an OpenEXR image")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to OpenEXR (and optionally a PNG preview).
+    Render {
+        /// The scene file (JSON).
+        scene: PathBuf,
+        /// Output EXR file [default: the scene's stem + .exr in the current directory].
+        #[arg(short, long, value_name = "OUT.exr")]
+        output: Option<PathBuf>,
+        /// Also write an sRGB PNG preview.
+        #[arg(long, value_name = "OUT.png")]
+        png: Option<PathBuf>,
+        /// Image width (overrides the scene; alone, keeps the aspect ratio).
+        #[arg(long, value_name = "W")]
+        width: Option<u32>,
+        /// Image height (overrides the scene; alone, keeps the aspect ratio).
+        #[arg(long, value_name = "H")]
+        height: Option<u32>,
+        /// Worker threads [default: one per core].
+        #[arg(long, value_name = "N")]
+        threads: Option<usize>,
+        /// Anti-aliasing: an N×N grid of rays per pixel (overrides settings.samples).
+        #[arg(long, value_name = "N")]
+        samples: Option<u32>,
+        /// Write the colour channels as 16-bit half floats.
+        #[arg(long)]
+        half: bool,
+        /// Exposure of the PNG preview in stops (pixel values are scaled by 2^E).
+        #[arg(long, value_name = "E", default_value_t = 0.0, allow_negative_numbers = true)]
+        exposure: f32,
+    },
+    /// Trace one ray and print every block's intervals, the partition and the first hit.
+    Trace {
+        /// The scene file (JSON).
+        scene: PathBuf,
+        /// Ray origin.
+        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true, required = true)]
+        origin: Vec<f64>,
+        /// Ray direction (normalised before use).
+        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true, required = true)]
+        direction: Vec<f64>,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Validate a scene and print a summary with warnings.
+    Check {
+        /// The scene file (JSON).
+        scene: PathBuf,
+    },
+    /// Print the JSON Schema (draft-07) of the scene format.
+    Schema,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli.command) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(if e.is_input_error() { EXIT_INPUT } else { EXIT_IO })
+        }
+    }
+}
+
+fn triple(v: &[f64]) -> [f64; 3] {
+    [v[0], v[1], v[2]]
+}
+
+fn run(command: Command) -> Result<(), Error> {
+    match command {
+        Command::Render { scene, output, png, width, height, threads, samples, half, exposure } => {
+            let mut world = render::load(&scene)?;
+            if let Some(n) = samples {
+                if !(1..=16).contains(&n) {
+                    return Err(Error::Options(format!("--samples must be between 1 and 16, got {n}")));
+                }
+                world.settings.samples = n;
+            }
+            let cam = world.camera;
+            let (w0, h0) = (f64::from(cam.width()), f64::from(cam.height()));
+            let size = match (width, height) {
+                (None, None) => None,
+                (Some(w), Some(h)) => Some((w, h)),
+                (Some(w), None) => Some((w, ((f64::from(w) * h0 / w0).round() as u32).max(1))),
+                (None, Some(h)) => Some((((f64::from(h) * w0 / h0).round() as u32).max(1), h)),
+            };
+            if let Some((w, h)) = size {
+                world.camera = cam.with_size(w, h).map_err(|e| Error::Options(format!("--width/--height: {e}")))?;
+            }
+            let output = output.unwrap_or_else(|| default_output(&scene));
+            let rows = u64::from(world.camera.height());
+            let bar = std::io::stderr().is_terminal().then(|| {
+                let bar = indicatif::ProgressBar::new(rows);
+                if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rows {elapsed}") {
+                    bar.set_style(style);
+                }
+                bar
+            });
+            let tick = || {
+                if let Some(b) = &bar {
+                    b.inc(1);
+                }
+            };
+            let (frame, stats) = render::frame::render(&world, render::frame::Options { threads }, &tick)?;
+            if let Some(b) = &bar {
+                b.finish_and_clear();
+            }
+            let color = if half { ColorType::F16 } else { ColorType::F32 };
+            render::exr::write_exr(&frame, &output, color)?;
+            if let Some(p) = &png {
+                render::png::write_png(&frame, p, exposure)?;
+            }
+            eprintln!(
+                "{}: {}x{} in {:.2} s, {} rays, {:.2} Mrays/s",
+                output.display(),
+                frame.width,
+                frame.height,
+                stats.elapsed.as_secs_f64(),
+                stats.rays,
+                stats.rays_per_second() / 1e6
+            );
+            Ok(())
+        }
+        Command::Trace { scene, origin, direction, json } => {
+            let world = render::load(&scene)?;
+            let report = render::trace::trace(&world, triple(&origin), triple(&direction))?;
+            if json {
+                let text = serde_json::to_string_pretty(&report).map_err(|e| Error::Options(e.to_string()))?;
+                println!("{text}");
+            } else {
+                print!("{report}");
+            }
+            Ok(())
+        }
+        Command::Check { scene } => {
+            let world = render::load(&scene)?;
+            print!("{}", render::check::check(&world));
+            Ok(())
+        }
+        Command::Schema => {
+            print!("{}", render::schema_json());
+            Ok(())
+        }
+    }
+}
+
+/// The scene's stem with `.exr`, in the current directory.
+fn default_output(scene: &Path) -> PathBuf {
+    let stem = scene.file_stem().map_or_else(|| "out".into(), |s| s.to_os_string());
+    let mut p = PathBuf::from(stem);
+    p.set_extension("exr");
+    p
+}

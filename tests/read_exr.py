@@ -1,0 +1,47 @@
+#!/usr/bin/env python3
+"""Reads an OpenEXR file with the reference `OpenEXR` package and prints
+everything the end-to-end tests check as JSON on stdout: the parts, the
+header's compression and storage, each channel's sample type and every
+sample (non-finite floats as the strings "inf", "-inf", "nan").
+
+Exit status 2 if the OpenEXR or numpy package is missing."""
+import json
+import math
+import sys
+
+try:
+    import numpy as np
+    import OpenEXR
+except ImportError as e:  # pragma: no cover
+    print(f"missing Python package: {e}", file=sys.stderr)
+    sys.exit(2)
+
+
+def sample(x):
+    if isinstance(x, float) and not math.isfinite(x):
+        return "nan" if math.isnan(x) else ("inf" if x > 0 else "-inf")
+    return x
+
+
+def main(path):
+    with OpenEXR.File(path, separate_channels=True) as f:
+        header = f.header()
+        lo, hi = header["dataWindow"]
+        out = {
+            "parts": len(f.parts),
+            "compression": str(header["compression"]).split(".")[-1].split(":")[0],
+            "storage": str(header["type"]).split(".")[-1].split(":")[0],
+            "width": int(hi[0] - lo[0] + 1),
+            "height": int(hi[1] - lo[1] + 1),
+            "channels": {},
+        }
+        for name, ch in f.channels().items():
+            px = ch.pixels
+            kind = {np.dtype("float32"): "f32", np.dtype("float16"): "f16", np.dtype("uint32"): "u32"}[px.dtype]
+            values = px.astype(np.float64).ravel().tolist() if kind != "u32" else px.ravel().tolist()
+            out["channels"][name] = {"type": kind, "samples": [sample(v) for v in values]}
+    json.dump(out, sys.stdout)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])

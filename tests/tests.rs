@@ -1,0 +1,12 @@
+//! End-to-end tests of the `komplex` binary (one test binary, topic modules).
+#![allow(clippy::unwrap_used)]
+
+mod geom;
+mod support;
+
+mod camera;
+mod cli;
+mod errors;
+mod exr_output;
+mod shading;
+mod trace;

@@ -1,0 +1,131 @@
+//! `komplex trace --json` reports what the kernel computes, and its
+//! partition agrees with point membership sampled along the ray.
+
+use complex::BlockId;
+use quadric::nalgebra::{Point3, Vector3};
+use quadric::Ray;
+use serde_json::Value;
+
+use crate::support::{komplex_ok, root, scene, world};
+
+fn num(v: &Value) -> Option<f64> {
+    v.as_f64()
+}
+
+fn trace_json(scene_name: &str, o: [f64; 3], d: [f64; 3]) -> Value {
+    let s = scene(scene_name);
+    let fmt = |v: f64| format!("{v:?}");
+    let args: Vec<String> = ["trace", s.to_str().unwrap(), "--json", "--origin"]
+        .iter()
+        .map(|x| x.to_string())
+        .chain(o.iter().map(|v| fmt(*v)))
+        .chain(["--direction".to_string()])
+        .chain(d.iter().map(|v| fmt(*v)))
+        .collect();
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let out = komplex_ok(&root(), &args);
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// The owner of `p` under the priority rule, from point membership alone.
+fn owner(w: &render::scene::World, p: &Point3<f64>) -> Option<u32> {
+    let blocks = w.complex.blocks();
+    let inside: Vec<usize> =
+        (0..blocks.len()).filter(|i| blocks[*i].solids().iter().all(|s| s.value(p) <= 0.0)).collect();
+    inside.iter().find(|i| !blocks[**i].is_transparent()).or(inside.first()).map(|i| *i as u32 + 1)
+}
+
+fn check(scene_name: &str, o: [f64; 3], d: [f64; 3], expect_hit: bool) {
+    let v = trace_json(scene_name, o, d);
+    let w = world(&scene(scene_name), None);
+    let c = &w.complex;
+    let ray = Ray::new(Point3::from(Vector3::from(o)), Vector3::from(d)).unwrap();
+
+    // Every block, 1-based, with exactly the kernel's interval set.
+    let blocks = v["blocks"].as_array().unwrap();
+    assert_eq!(blocks.len(), c.blocks().len());
+    for (i, b) in blocks.iter().enumerate() {
+        assert_eq!(b["index"], i as u64 + 1);
+        assert_eq!(b["name"], c.blocks()[i].name());
+        let want: Vec<[Option<f64>; 2]> = c
+            .block_intervals(BlockId(i as u32), &ray)
+            .iter()
+            .map(|iv| [iv.enter.t, iv.exit.t].map(|t| t.is_finite().then_some(t)))
+            .collect();
+        let got: Vec<[Option<f64>; 2]> =
+            b["intervals"].as_array().unwrap().iter().map(|p| [num(&p[0]), num(&p[1])]).collect();
+        assert_eq!(got, want, "block {}", i + 1);
+    }
+
+    // The partition covers [0, ∞) and each segment's owner is the owner of
+    // points sampled inside it.
+    let segs = v["segments"].as_array().unwrap();
+    assert_eq!(segs[0]["start"], 0.0);
+    assert!(segs.last().unwrap()["end"].is_null());
+    for pair in segs.windows(2) {
+        assert_eq!(pair[0]["end"], pair[1]["start"]);
+    }
+    for s in segs {
+        let a = num(&s["start"]).unwrap();
+        let b = num(&s["end"]).unwrap_or(a + 50.0);
+        if b - a < 1e-6 {
+            continue;
+        }
+        for k in 1..8 {
+            let t = a + (b - a) * f64::from(k) / 8.0;
+            let got = s["block"].as_u64().map(|x| x as u32);
+            assert_eq!(got, owner(&w, &ray.at(t)), "segment [{a}, {b}] at t = {t}");
+            if let Some(id) = got {
+                assert_eq!(s["name"], c.blocks()[id as usize - 1].name());
+            }
+        }
+    }
+
+    // The hit is the kernel's, 1-based; it lies on the reported surface.
+    match (c.cast_ray(&ray, f64::INFINITY), &v["hit"]) {
+        (None, Value::Null) => assert!(!expect_hit),
+        (Some(h), hit) => {
+            assert!(expect_hit);
+            assert_eq!(num(&hit["t"]), Some(h.t));
+            assert_eq!(hit["block"], h.block.0 as u64 + 1);
+            assert_eq!(hit["object"], h.solid as u64 + 1);
+            let p: Vec<f64> = hit["point"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+            assert_eq!(p, vec![h.point.x, h.point.y, h.point.z]);
+            let solid = &c.blocks()[h.block.index()].solids()[h.solid as usize];
+            // The scenes' solids have unit-scale coefficients, so |f| bounds the distance.
+            assert!(solid.value(&h.point).abs() < 1e-9, "hit not on its surface");
+            // The hit is the first segment boundary after ε.
+            let first = segs.iter().filter_map(|s| num(&s["end"])).find(|t| *t > c.epsilon());
+            assert_eq!(first, Some(h.t));
+        }
+        (None, hit) => panic!("kernel misses but trace reports {hit}"),
+    }
+}
+
+#[test]
+fn trace_agrees_with_the_kernel() {
+    // Through the glass ball into the overlapping water box (priority rule).
+    check("glass.json", [-3.0, 1.1, 0.3], [1.0, 0.0, 0.0], true);
+    // Through both amber lobes (same medium).
+    check("glass.json", [0.0, 0.8, 0.4], [1.0, 0.0, -0.1], true);
+    // Down through the table top, a leg-free spot, the floor.
+    check("table.json", [0.2, 3.0, 0.1], [0.0, -1.0, 0.0], true);
+    // Through the drilled box along a bore.
+    check("csg.json", [-1.5, 5.0, 0.0], [0.0, -1.0, 0.0], true);
+    // Up into the sky: nothing.
+    check("primitives.json", [0.0, 20.0, 0.0], [0.1, 1.0, 0.0], false);
+}
+
+#[test]
+fn trace_text_form_prints_full_precision() {
+    let s = scene("table.json");
+    let out = komplex_ok(
+        &root(),
+        &["trace", s.to_str().unwrap(), "--origin", "0", "3", "0", "--direction", "0.1", "-1", "0.05"],
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("blocks:") && text.contains("segments:") && text.contains("hit: t = "), "{text}");
+    let v = trace_json("table.json", [0.0, 3.0, 0.0], [0.1, -1.0, 0.05]);
+    let t = v["hit"]["t"].as_f64().unwrap();
+    assert!(text.contains(&format!("{t:?}")), "{t:?} not in\n{text}");
+}
