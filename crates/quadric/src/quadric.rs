@@ -3,7 +3,7 @@
 use nalgebra::{Matrix3, Matrix4, Point3, Vector3};
 
 use crate::interval::{Bound, IntervalSet};
-use crate::roots::{difference_of_products, stable_roots};
+use crate::roots::{difference_of_products, stable_roots, two_sum_error};
 use crate::{GeometryError, Ray, Transform};
 
 /// A quadric solid, stored around a local centre `c`:
@@ -33,8 +33,19 @@ pub struct Quadric {
 }
 
 impl Quadric {
+    /// Stores the parts scaled by a power of two that brings the largest
+    /// coefficient into `[1, 2)`: the same solid (the scaling is exact unless
+    /// a coefficient is below 2⁻¹⁰²² times the largest), and `f` then
+    /// overflows only where `|x - c|²` does, whatever scale the input had.
     fn from_parts(centre: Vector3<f64>, a: Matrix3<f64>, w: Vector3<f64>, k: f64) -> Self {
-        Quadric { centre, a, w, k }
+        let m = a.amax().max(w.amax()).max(k.abs());
+        if !(m > 0.0 && m.is_finite()) || (1.0..2.0).contains(&m) {
+            return Quadric { centre, a, w, k };
+        }
+        // Two factors, each a normal power of two, cover every finite `m`.
+        let e = m.log2().floor() as i32;
+        let (f1, f2) = (pow2(-e / 2), pow2(-e - (-e / 2)));
+        Quadric { centre, a: a * f1 * f2, w: w * f1 * f2, k: k * f1 * f2 }
     }
 
     fn diagonal(a: f64, b: f64, c: f64, k: f64) -> Self {
@@ -168,8 +179,7 @@ impl Quadric {
 
     /// `f(x)`, evaluated relative to the centre. The solid is `f <= 0`.
     pub fn value(&self, x: &Point3<f64>) -> f64 {
-        let d = x.coords - self.centre;
-        d.dot(&(self.a * d + self.w)) + self.w.dot(&d) + self.k
+        self.value_at_offset(&(x.coords - self.centre))
     }
 
     /// Whether `x` lies in the closed solid.
@@ -201,59 +211,106 @@ impl Quadric {
         self.a.iter().chain(self.w.iter()).chain(self.centre.iter()).all(|c| c.is_finite()) && self.k.is_finite()
     }
 
-    /// The coefficients `t` and `u` of `f(p + λr) = sλ² + 2tλ + u` for the
-    /// ray origin taken relative to the centre, `d = p - c`.
+    /// `f(c + d)`, the value at an offset `d` from the centre.
     #[inline(always)]
-    fn tu(&self, d: &Vector3<f64>, r: &Vector3<f64>) -> (f64, f64) {
-        let g = self.a * d + self.w;
-        (r.dot(&g), d.dot(&(g + self.w)) + self.k)
+    fn value_at_offset(&self, d: &Vector3<f64>) -> f64 {
+        d.dot(&(self.a * d + self.w + self.w)) + self.k
     }
 
     /// The set of `λ >= 0` with `p + λr` inside the solid; every finite end
     /// carries `solid` as the surface it lies on.
     ///
+    /// With `d = p - c`: `f(p + λr) = sλ² + 2tλ + u`, `s = rᵀAr`,
+    /// `t = rᵀ(Ad + w)`, `u = f(p)`, solved by the table of SPEC §2.
     /// Numerics (see `docs/quadric.md`): coefficients relative to the local
     /// centre; stable roots; `t² - su` by a fused difference of products;
     /// and when the roots cluster far along the ray (`|t² - su| < t²/4`, the
-    /// case where `t² - su` cancels), the ray is re-based at the midpoint
-    /// `λ₀ = -t/s` and the quadratic re-solved there, so the result stays
-    /// within a small multiple of the rounding floor of the hit point.
+    /// case where `t² - su` cancels), the ray is re-based at its apex
+    /// `λ₀ ≈ -t/s` and the quadratic re-solved there.
     pub fn intervals(&self, ray: &Ray, solid: u32) -> IntervalSet {
         let r = ray.direction();
         let d = ray.origin().coords - self.centre;
+        // `s` and `rᵀw` depend on the direction only, and with `A` symmetric
+        // `t = (Ar)·d + rᵀw` is a short chain: the re-basing waits on `t`.
         let ar = self.a * r;
         let s = r.dot(&ar);
-        let (t, u) = self.tu(&d, &r);
+        let rw = r.dot(&self.w);
+        let t = ar.dot(&d) + rw;
+        let u = self.value_at_offset(&d);
         let set = if s == 0.0 {
-            linear_set(t, u, solid)
+            // A straight line in `λ`. Its root is re-solved where it lies:
+            // `u` at a far origin may have lost it to cancellation.
+            let lambda0 = -u / (2.0 * t);
+            let (t0, u0) = self.coefficients_at(ray, &d, &ar, rw, lambda0);
+            // `t` is constant along the line; a re-based `t` of another sign
+            // (or zero) means `t` is rounding noise: keep the plain solution.
+            if lambda0.is_finite() && u0.is_finite() && t0 != 0.0 && (t0 > 0.0) == (t > 0.0) {
+                linear_set(t0, u0, lambda0, solid)
+            } else {
+                linear_set(t, u, 0.0, solid)
+            }
         } else {
             let disc = difference_of_products(t, t, s, u);
-            let (lambda0, t, u, disc) = if disc.abs() < 0.25 * t * t {
-                // Re-base at the midpoint of the roots: there t ≈ 0 and u is
-                // small, so nothing cancels.
-                let l0 = -t / s;
-                let d0 = Vector3::new(l0.mul_add(r.x, d.x), l0.mul_add(r.y, d.y), l0.mul_add(r.z, d.z));
-                let (t0, u0) = self.tu(&d0, &r);
-                (l0, t0, u0, difference_of_products(t0, t0, s, u0))
-            } else {
-                (0.0, t, u, disc)
-            };
-            quadratic_set(s, t, u, disc, lambda0, solid)
+            // When the roots cluster far along the ray (`|t² - su| < t²/4`),
+            // `t² - su` has cancelled: re-solve at the apex `λ₀ ≈ -t/s`, where
+            // `t ≈ 0` and `u ≈ -(t² - su)/s` is small, so nothing cancels.
+            // Any `λ₀` is exact for the re-based quadratic, so it may be
+            // rounded (`-t · (1/s)`: the reciprocal is off the critical path).
+            let lambda0 = -t * s.recip();
+            let rebased = (disc.abs() < 0.25 * t * t && lambda0.is_finite())
+                .then(|| {
+                    let (t0, u0) = self.coefficients_at(ray, &d, &ar, rw, lambda0);
+                    (t0, u0, difference_of_products(t0, t0, s, u0))
+                })
+                .filter(|&(_, _, disc0)| disc0.is_finite());
+            match rebased {
+                Some((t0, u0, disc0)) => quadratic_set(s, t0, u0, disc0, lambda0, solid),
+                None => quadratic_set(s, t, u, disc, 0.0, solid),
+            }
         };
         set.clip(0.0, f64::INFINITY)
     }
+
+    /// `t` and `u` for the ray re-based at `p + λ₀r`, given `d = p - c`,
+    /// `Ar` and `rᵀw`.
+    ///
+    /// The new base point `d + λ₀r` is where the roots are, near the quadric,
+    /// so the one rounding of its fused form costs an ulp at the quadric's
+    /// scale, not at the distance; what is left is the rounding of `d = p - c`
+    /// itself (half an ulp of the distance), which TwoSum recovers exactly as
+    /// `lo` and which enters `t` and `u` to first order (its square is far
+    /// below rounding).
+    #[inline(always)]
+    fn coefficients_at(&self, ray: &Ray, d: &Vector3<f64>, ar: &Vector3<f64>, rw: f64, lambda0: f64) -> (f64, f64) {
+        let (p, r) = (ray.origin().coords, ray.direction());
+        let base = Vector3::new(lambda0.mul_add(r.x, d.x), lambda0.mul_add(r.y, d.y), lambda0.mul_add(r.z, d.z));
+        let lo = Vector3::new(
+            two_sum_error(p.x, -self.centre.x, d.x),
+            two_sum_error(p.y, -self.centre.y, d.y),
+            two_sum_error(p.z, -self.centre.z, d.z),
+        );
+        let g = self.a * base + self.w;
+        let t0 = ar.dot(&base) + (rw + ar.dot(&lo));
+        let u0 = base.dot(&(g + self.w)) + self.k + 2.0 * lo.dot(&g);
+        (t0, u0)
+    }
 }
 
-/// `{λ : 2tλ + u <= 0}` (the `s = 0` rows of the table).
+/// `2^e` for `-1022 <= e <= 1023`.
+fn pow2(e: i32) -> f64 {
+    f64::from_bits(((e + 1023) as u64) << 52)
+}
+
+/// `{λ : 2tλ + u <= 0}` (the `s = 0` rows of the table), shifted by `lambda0`.
 #[inline]
-fn linear_set(t: f64, u: f64, solid: u32) -> IntervalSet {
+fn linear_set(t: f64, u: f64, lambda0: f64, solid: u32) -> IntervalSet {
     if !(t.is_finite() && u.is_finite()) {
         return IntervalSet::empty();
     }
     if t == 0.0 {
         return if u <= 0.0 { IntervalSet::everything() } else { IntervalSet::empty() };
     }
-    let root = -u / (2.0 * t);
+    let root = lambda0 + -u / (2.0 * t);
     if t > 0.0 {
         IntervalSet::from_interval(Bound::free(f64::NEG_INFINITY), Bound::new(root, solid))
     } else {

@@ -11,6 +11,14 @@ pub fn difference_of_products(a: f64, b: f64, c: f64, d: f64) -> f64 {
     dop + err
 }
 
+/// The exact rounding error of `sum = fl(a + b)`, so that `a + b = sum + err`
+/// exactly (Knuth's TwoSum, branch-free; `sum` must be `a + b` as computed).
+#[inline(always)]
+pub fn two_sum_error(a: f64, b: f64, sum: f64) -> f64 {
+    let bb = sum - a;
+    (a - (sum - bb)) + (b - bb)
+}
+
 /// The two real roots of `sλ² + 2tλ + u` given `disc = t² - su >= 0`,
 /// in increasing order, by the stable form `q = -(t + copysign(√disc, t))`,
 /// `λ = q/s` and `u/q`: neither root is formed by cancelling `-t ± √disc`.
@@ -19,7 +27,12 @@ pub fn difference_of_products(a: f64, b: f64, c: f64, d: f64) -> f64 {
 /// both roots are 0.
 #[inline(always)]
 pub fn stable_roots(s: f64, t: f64, u: f64, disc: f64) -> (f64, f64) {
-    let q = -(t + disc.sqrt().copysign(t));
+    // The sign is taken from `s` when `t` is zero, so that the roots are an
+    // odd function of `(s, t, u)`: `t` may come out as `+0.0` for both `Q`
+    // and `-Q`, and a solid and its complement must share their roots bit
+    // for bit.
+    let sign = if t == 0.0 { s } else { t };
+    let q = -(t + disc.sqrt().copysign(sign));
     if q == 0.0 {
         return (0.0, 0.0);
     }
