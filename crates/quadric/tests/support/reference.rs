@@ -420,6 +420,9 @@ pub struct Shape {
     pub outside: fn(&mut Rng) -> [f64; 3],
     /// The shape's size: errors are reported in these units ("radii").
     pub size: f64,
+    /// Rays exactly along the unit frame's y axis (`s = 0` for a paraboloid)
+    /// from `distance` below the shape, instead of rays from the origin.
+    pub along_y: bool,
 }
 
 use quadric::nalgebra::{Point3, Vector3};
@@ -444,6 +447,7 @@ pub fn unit_sphere() -> Shape {
         inside: |rng| rng.in_ball(0.95),
         outside: |rng| rng.direction().map(|c| c * 1.5),
         size: 1.0,
+        along_y: false,
     }
 }
 
@@ -458,6 +462,7 @@ pub fn other_shapes() -> Vec<Shape> {
             inside: |rng| rng.in_ball(0.95),
             outside: |rng| rng.direction().map(|c| c * 1.5),
             size: 1.0,
+            along_y: false,
         },
         Shape {
             name: "cylinder r = 1, rotated",
@@ -469,6 +474,7 @@ pub fn other_shapes() -> Vec<Shape> {
             },
             outside: |rng| ring(rng, 1.5, (-2.0, 2.0)),
             size: 1.0,
+            along_y: false,
         },
         Shape {
             name: "one-sheet hyperboloid, rotated",
@@ -477,6 +483,7 @@ pub fn other_shapes() -> Vec<Shape> {
             inside: |rng| rng.in_ball(0.95),
             outside: |rng| ring(rng, 1.5, (-0.5, 0.5)),
             size: 1.0,
+            along_y: false,
         },
         Shape {
             name: "paraboloid, rotated",
@@ -488,6 +495,19 @@ pub fn other_shapes() -> Vec<Shape> {
             },
             outside: |rng| ring(rng, 1.5, (0.0, 1.0)),
             size: 1.0,
+            along_y: false,
+        },
+        Shape {
+            name: "paraboloid, rays along its axis (s = 0)",
+            solid: Quadric::paraboloid(),
+            linear: Transform::identity(),
+            inside: |rng| {
+                let b = rng.in_ball(0.5);
+                [b[0], b[1] + 1.0, b[2]]
+            },
+            outside: |rng| ring(rng, 1.5, (0.0, 1.0)),
+            size: 1.0,
+            along_y: true,
         },
     ]
 }
@@ -517,8 +537,13 @@ impl Scene {
     /// taken in world space or relative to the quadric's centre, whichever is
     /// coarser (near the world origin the local coordinates set the floor).
     pub fn ulp_at(&self, x: [f64; 3]) -> f64 {
+        ulp_of_point(x).max(self.local_ulp(x))
+    }
+
+    /// An ulp of the largest coordinate of `x - c` (the quadric's own scale).
+    pub fn local_ulp(&self, x: [f64; 3]) -> f64 {
         let c = self.quadric.centre();
-        ulp_of_point(x).max(ulp_of_point([x[0] - c.x, x[1] - c.y, x[2] - c.z]))
+        ulp_of_point([x[0] - c.x, x[1] - c.y, x[2] - c.z])
     }
 
     /// Whether the line of `ray` crosses the surface (exact).
@@ -534,6 +559,18 @@ impl Scene {
         let world = |p: [f64; 3]| self.placement.apply_point(&Point3::from(p));
         let aim = |o: Point3<f64>, x: Point3<f64>| Ray::new(o, x - o).ok();
         let mut out = Vec::with_capacity(n);
+        if shape.along_y {
+            // From `distance` below the shape straight up its axis: the
+            // direction is exact, so `s = rᵀAr` is exactly zero.
+            let c = self.quadric.centre();
+            let below = c.coords.norm();
+            while out.len() < n {
+                let off = rng.in_ball(1.5);
+                let o = Point3::new(c.x + off[0], c.y - below, c.z + off[2]);
+                out.extend(Ray::new(o, Vector3::y()).ok());
+            }
+            return out;
+        }
         while out.len() < n {
             let o = Point3::from(rng.in_ball(camera));
             let hit = world((shape.inside)(rng));
@@ -584,16 +621,16 @@ pub struct Tally {
     pub false_misses: usize,
     /// Of those, how many lie outside the tangency band (see [`Judge`]).
     pub unexcused: usize,
-    /// The largest tangency gap (in ulps of the apex) of a false hit or miss.
+    /// The largest tangency gap (in local ulps at the apex) of a false hit or miss.
     pub worst_gap_ulps: f64,
 }
 
 /// How [`Tally::add`] excuses false hits and misses: only rays whose line
-/// passes within `band_ulps` ulps of touching the surface (the tangency
-/// gap, measured at the apex `-t/s`) or that start within `band_ulps` ulps
-/// of the surface.
+/// passes within `band_ulps` ulps of touching the surface (the tangency gap,
+/// measured at the apex `-t/s`) or that start within `band_ulps` ulps of it,
+/// in ulps of the quadric's own coordinates `x - c` (not of the distance).
 pub struct Judge {
-    /// Width of the tangency band in ulps of the apex coordinates.
+    /// Width of the tangency band in ulps of the apex coordinates relative to the centre.
     pub band_ulps: f64,
 }
 
@@ -633,11 +670,11 @@ impl Tally {
                 f64::INFINITY
             } else {
                 let apex = point_at(ray, &(-&exact.t).div(&exact.s)).map(|c| c.to_f64());
-                scene.exact.tangency_gap(ray, exact) / scene.ulp_at(apex)
+                scene.exact.tangency_gap(ray, exact) / scene.local_ulp(apex)
             };
             let p = ray.origin();
             let p = [p.x, p.y, p.z];
-            let start = scene.exact.distance_f64(p).unwrap_or(0.0) / scene.ulp_at(p);
+            let start = scene.exact.distance_f64(p).unwrap_or(0.0) / scene.local_ulp(p);
             let gap = gap.min(start);
             self.worst_gap_ulps = self.worst_gap_ulps.max(gap);
             if gap > judge.band_ulps {
@@ -651,19 +688,6 @@ impl Tally {
             if let Some(dist) = scene.exact.distance_f64([x.x, x.y, x.z]) {
                 self.size_units.push(dist / scene.size);
                 self.ulps.push(dist / scene.ulp_at(exact_point));
-                if std::env::var("DEBUG_WORST").is_ok() && dist / scene.ulp_at(exact_point) > 2.0 {
-                    eprintln!(
-                        "WORST {} ulp: ray {:?} s {} t {} u {} lh {lh} l {} x {:?} c {:?}",
-                        dist / scene.ulp_at(exact_point),
-                        ray,
-                        exact.s.to_f64(),
-                        exact.t.to_f64(),
-                        exact.u.to_f64(),
-                        l.to_f64(),
-                        x,
-                        scene.quadric.centre()
-                    );
-                }
             }
             let err = &Big::from_f64(lh) - l;
             self.lambda_rel.push(if l.signum() == 0 { err.abs().to_f64() } else { err.div(l).abs().to_f64() });
