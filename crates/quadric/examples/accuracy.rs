@@ -70,7 +70,7 @@ impl World {
                 if s > 0.0 {
                     IntervalSet::empty()
                 } else {
-                    IntervalSet::everything()
+                    whole_ray()
                 }
             } else {
                 let root = disc.sqrt();
@@ -78,7 +78,7 @@ impl World {
                 quadratic(s, l1.min(l2), l1.max(l2))
             }
         };
-        set.clip(0.0, f64::INFINITY)
+        set
     }
 
     /// World-space coefficients, but stable roots and an FMA discriminant.
@@ -93,36 +93,60 @@ impl World {
                 if s > 0.0 {
                     IntervalSet::empty()
                 } else {
-                    IntervalSet::everything()
+                    whole_ray()
                 }
             } else {
                 let (l1, l2) = stable_roots(s, t, u, disc);
                 quadratic(s, l1, l2)
             }
         };
-        set.clip(0.0, f64::INFINITY)
+        set
     }
 }
 
+// The textbook kernels build their sets already clipped to `λ >= 0`, the
+// same way `Quadric::intervals` does, so that the cost comparison is of the
+// root finding alone.
+
+fn whole_ray() -> IntervalSet {
+    IntervalSet::from_interval(Bound::free(0.0), Bound::free(f64::INFINITY))
+}
+
+fn up_to(root: f64) -> IntervalSet {
+    IntervalSet::from_interval(Bound::free(0.0), Bound::new(root + 0.0, 0))
+}
+
+fn from(root: f64) -> IntervalSet {
+    let enter = if root >= 0.0 { Bound::new(root + 0.0, 0) } else { Bound::free(0.0) };
+    IntervalSet::from_interval(enter, Bound::free(f64::INFINITY))
+}
+
+#[inline(always)]
 fn linear(t: f64, u: f64) -> IntervalSet {
     if t == 0.0 {
-        return if u <= 0.0 { IntervalSet::everything() } else { IntervalSet::empty() };
+        return if u <= 0.0 { whole_ray() } else { IntervalSet::empty() };
     }
     let root = -u / (2.0 * t);
     if t > 0.0 {
-        IntervalSet::from_interval(Bound::free(f64::NEG_INFINITY), Bound::new(root, 0))
+        up_to(root)
     } else {
-        IntervalSet::from_interval(Bound::new(root, 0), Bound::free(f64::INFINITY))
+        from(root)
     }
 }
 
+#[inline(always)]
 fn quadratic(s: f64, l1: f64, l2: f64) -> IntervalSet {
     if s > 0.0 {
-        IntervalSet::from_interval(Bound::new(l1, 0), Bound::new(l2, 0))
+        let enter = if l1 >= 0.0 { Bound::new(l1 + 0.0, 0) } else { Bound::free(0.0) };
+        IntervalSet::from_interval(enter, Bound::new(l2 + 0.0, 0))
+    } else if l1 < l2 && l1 > 0.0 {
+        up_to(l1).union(&from(l2)).unwrap_or_else(|_| whole_ray())
+    } else if l1 < l2 {
+        from(l2)
+    } else if l1 == l2 {
+        whole_ray()
     } else {
-        let low = IntervalSet::from_interval(Bound::free(f64::NEG_INFINITY), Bound::new(l1, 0));
-        let high = IntervalSet::from_interval(Bound::new(l2, 0), Bound::free(f64::INFINITY));
-        low.union(&high).unwrap_or_else(|_| IntervalSet::everything())
+        IntervalSet::empty()
     }
 }
 

@@ -237,7 +237,7 @@ impl Quadric {
         let rw = r.dot(&self.w);
         let t = ar.dot(&d) + rw;
         let u = self.value_at_offset(&d);
-        let set = if s == 0.0 {
+        if s == 0.0 {
             // A straight line in `λ`. Its root is re-solved where it lies:
             // `u` at a far origin may have lost it to cancellation.
             let lambda0 = -u / (2.0 * t);
@@ -267,8 +267,7 @@ impl Quadric {
                 Some((t0, u0, disc0)) => quadratic_set(s, t0, u0, disc0, lambda0, solid),
                 None => quadratic_set(s, t, u, disc, 0.0, solid),
             }
-        };
-        set.clip(0.0, f64::INFINITY)
+        }
     }
 
     /// `t` and `u` for the ray re-based at `p + λ₀r`, given `d = p - c`,
@@ -301,40 +300,73 @@ fn pow2(e: i32) -> f64 {
     f64::from_bits(((e + 1023) as u64) << 52)
 }
 
-/// `{λ : 2tλ + u <= 0}` (the `s = 0` rows of the table), shifted by `lambda0`.
-#[inline]
+// The sets below are built already clipped to the ray, `λ >= 0`, in one
+// construction: an `IntervalSet` is a few hundred bytes, and building it
+// whole and then clipping it copies it twice. They agree with
+// `set.clip(0.0, ∞)` of the unclipped set: a clipped end is free at `+0.0`, a
+// root at exactly zero keeps its solid, and no end is `-0.0` (`x + 0.0`).
+
+/// The whole ray, `[0, ∞)`.
+#[inline(always)]
+fn whole_ray() -> IntervalSet {
+    IntervalSet::from_interval(Bound::free(0.0), Bound::free(f64::INFINITY))
+}
+
+/// `(-∞, root] ∩ [0, ∞)`.
+#[inline(always)]
+fn up_to(root: f64, solid: u32) -> IntervalSet {
+    IntervalSet::from_interval(Bound::free(0.0), Bound::new(root + 0.0, solid))
+}
+
+/// `[root, ∞) ∩ [0, ∞)`.
+#[inline(always)]
+fn from(root: f64, solid: u32) -> IntervalSet {
+    let enter = if root >= 0.0 { Bound::new(root + 0.0, solid) } else { Bound::free(0.0) };
+    IntervalSet::from_interval(enter, Bound::free(f64::INFINITY))
+}
+
+/// `{λ >= 0 : 2tλ + u <= 0}` (the `s = 0` rows of the table), for the ray
+/// re-based at `lambda0`.
+#[inline(always)]
 fn linear_set(t: f64, u: f64, lambda0: f64, solid: u32) -> IntervalSet {
     if !(t.is_finite() && u.is_finite()) {
         return IntervalSet::empty();
     }
     if t == 0.0 {
-        return if u <= 0.0 { IntervalSet::everything() } else { IntervalSet::empty() };
+        return if u <= 0.0 { whole_ray() } else { IntervalSet::empty() };
     }
     let root = lambda0 + -u / (2.0 * t);
     if t > 0.0 {
-        IntervalSet::from_interval(Bound::free(f64::NEG_INFINITY), Bound::new(root, solid))
+        up_to(root, solid)
     } else {
-        IntervalSet::from_interval(Bound::new(root, solid), Bound::free(f64::INFINITY))
+        from(root, solid)
     }
 }
 
-/// `{λ : sλ² + 2tλ + u <= 0}` for `s != 0`, shifted by `lambda0`.
-#[inline]
+/// `{λ >= 0 : sλ² + 2tλ + u <= 0}` for `s != 0`, for the ray re-based at
+/// `lambda0`.
+#[inline(always)]
 fn quadratic_set(s: f64, t: f64, u: f64, disc: f64, lambda0: f64, solid: u32) -> IntervalSet {
     if !(disc.is_finite() && lambda0.is_finite()) {
         return IntervalSet::empty();
     }
     if disc < 0.0 {
-        return if s > 0.0 { IntervalSet::empty() } else { IntervalSet::everything() };
+        return if s > 0.0 { IntervalSet::empty() } else { whole_ray() };
     }
     let (r1, r2) = stable_roots(s, t, u, disc);
     let (l1, l2) = (lambda0 + r1, lambda0 + r2);
     if s > 0.0 {
-        IntervalSet::from_interval(Bound::new(l1, solid), Bound::new(l2, solid))
+        let enter = if l1 >= 0.0 { Bound::new(l1 + 0.0, solid) } else { Bound::free(0.0) };
+        IntervalSet::from_interval(enter, Bound::new(l2 + 0.0, solid))
+    } else if l1 < l2 && l1 > 0.0 {
+        // Two disjoint pieces, `[0, l1]` and `[l2, ∞)`: within capacity.
+        up_to(l1, solid).union(&from(l2, solid)).unwrap_or_else(|_| whole_ray())
+    } else if l1 < l2 {
+        from(l2, solid)
+    } else if l1 == l2 {
+        // The pieces touch (a tangent ray from outside): the whole line.
+        whole_ray()
     } else {
-        let low = IntervalSet::from_interval(Bound::free(f64::NEG_INFINITY), Bound::new(l1, solid));
-        let high = IntervalSet::from_interval(Bound::new(l2, solid), Bound::free(f64::INFINITY));
-        // Two disjoint pieces (or, if they touch, the whole line): within capacity.
-        low.union(&high).unwrap_or_else(|_| IntervalSet::everything())
+        IntervalSet::empty()
     }
 }
