@@ -62,7 +62,7 @@ impl World {
     #[inline(never)]
     fn naive(&self, ray: &Ray) -> IntervalSet {
         let (s, t, u) = self.stu(ray);
-        let set = if s == 0.0 {
+        if s == 0.0 {
             linear(t, u)
         } else {
             let disc = t * t - s * u;
@@ -77,15 +77,14 @@ impl World {
                 let (l1, l2) = ((-t - root) / s, (-t + root) / s);
                 quadratic(s, l1.min(l2), l1.max(l2))
             }
-        };
-        set
+        }
     }
 
     /// World-space coefficients, but stable roots and an FMA discriminant.
     #[inline(never)]
     fn stable(&self, ray: &Ray) -> IntervalSet {
         let (s, t, u) = self.stu(ray);
-        let set = if s == 0.0 {
+        if s == 0.0 {
             linear(t, u)
         } else {
             let disc = difference_of_products(t, t, s, u);
@@ -99,8 +98,7 @@ impl World {
                 let (l1, l2) = stable_roots(s, t, u, disc);
                 quadratic(s, l1, l2)
             }
-        };
-        set
+        }
     }
 }
 

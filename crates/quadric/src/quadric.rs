@@ -220,78 +220,42 @@ impl Quadric {
     /// The set of `λ >= 0` with `p + λr` inside the solid; every finite end
     /// carries `solid` as the surface it lies on.
     ///
-    /// With `d = p - c`: `f(p + λr) = sλ² + 2tλ + u`, `s = rᵀAr`,
-    /// `t = rᵀ(Ad + w)`, `u = f(p)`, solved by the table of SPEC §2.
-    /// Numerics (see `docs/quadric.md`): coefficients relative to the local
-    /// centre; stable roots; `t² - su` by a fused difference of products;
-    /// and when the roots cluster far along the ray (`|t² - su| < t²/4`, the
-    /// case where `t² - su` cancels), the ray is re-based at its apex
-    /// `λ₀ ≈ -t/s` and the quadratic re-solved there.
+    /// `f(p + λr) = sλ² + 2tλ + u` with `s = rᵀAr`, `t = rᵀ(A(p-c) + w)`,
+    /// `u = f(p)`, solved by the table of SPEC §2. Numerics (see
+    /// `docs/quadric.md`): coefficients relative to the local centre `c`;
+    /// the ray re-based exactly at the foot of the perpendicular from `c`,
+    /// near the roots, so that nothing cancels however far the ray starts;
+    /// `t² - su` by a fused difference of products; stable roots.
     pub fn intervals(&self, ray: &Ray, solid: u32) -> IntervalSet {
-        let r = ray.direction();
-        let d = ray.origin().coords - self.centre;
-        // `s` and `rᵀw` depend on the direction only, and with `A` symmetric
-        // `t = (Ar)·d + rᵀw` is a short chain: the re-basing waits on `t`.
-        let ar = self.a * r;
-        let s = r.dot(&ar);
-        let rw = r.dot(&self.w);
-        let t = ar.dot(&d) + rw;
-        let u = self.value_at_offset(&d);
-        if s == 0.0 {
-            // A straight line in `λ`. Its root is re-solved where it lies:
-            // `u` at a far origin may have lost it to cancellation.
-            let lambda0 = -u / (2.0 * t);
-            let (t0, u0) = self.coefficients_at(ray, &d, &ar, rw, lambda0);
-            // `t` is constant along the line; a re-based `t` of another sign
-            // (or zero) means `t` is rounding noise: keep the plain solution.
-            if lambda0.is_finite() && u0.is_finite() && t0 != 0.0 && (t0 > 0.0) == (t > 0.0) {
-                linear_set(t0, u0, lambda0, solid)
-            } else {
-                linear_set(t, u, 0.0, solid)
-            }
-        } else {
-            let disc = difference_of_products(t, t, s, u);
-            // When the roots cluster far along the ray (`|t² - su| < t²/4`),
-            // `t² - su` has cancelled: re-solve at the apex `λ₀ ≈ -t/s`, where
-            // `t ≈ 0` and `u ≈ -(t² - su)/s` is small, so nothing cancels.
-            // Any `λ₀` is exact for the re-based quadratic, so it may be
-            // rounded (`-t · (1/s)`: the reciprocal is off the critical path).
-            let lambda0 = -t * s.recip();
-            let rebased = (disc.abs() < 0.25 * t * t && lambda0.is_finite())
-                .then(|| {
-                    let (t0, u0) = self.coefficients_at(ray, &d, &ar, rw, lambda0);
-                    (t0, u0, difference_of_products(t0, t0, s, u0))
-                })
-                .filter(|&(_, _, disc0)| disc0.is_finite());
-            match rebased {
-                Some((t0, u0, disc0)) => quadratic_set(s, t0, u0, disc0, lambda0, solid),
-                None => quadratic_set(s, t, u, disc, 0.0, solid),
-            }
-        }
-    }
-
-    /// `t` and `u` for the ray re-based at `p + λ₀r`, given `d = p - c`,
-    /// `Ar` and `rᵀw`.
-    ///
-    /// The new base point `d + λ₀r` is where the roots are, near the quadric,
-    /// so the one rounding of its fused form costs an ulp at the quadric's
-    /// scale, not at the distance; what is left is the rounding of `d = p - c`
-    /// itself (half an ulp of the distance), which TwoSum recovers exactly as
-    /// `lo` and which enters `t` and `u` to first order (its square is far
-    /// below rounding).
-    #[inline(always)]
-    fn coefficients_at(&self, ray: &Ray, d: &Vector3<f64>, ar: &Vector3<f64>, rw: f64, lambda0: f64) -> (f64, f64) {
         let (p, r) = (ray.origin().coords, ray.direction());
+        let d = p - self.centre;
+        // The foot of the perpendicular from the centre, `λ₀ = -r·d`. Any `λ₀`
+        // gives the same quadratic in `λ - λ₀`; this one puts the base point
+        // within the quadric's own scale of the roots (`|x - c|² = |b|² + ρ²`
+        // for a root `x = c + b + ρr`, so `|ρ| <= |x - c|`), costs no division
+        // and is never far off even where `s ≈ 0` puts the apex `-t/s` at
+        // infinity.
+        let lambda0 = -r.dot(&d);
         let base = Vector3::new(lambda0.mul_add(r.x, d.x), lambda0.mul_add(r.y, d.y), lambda0.mul_add(r.z, d.z));
+        // `base` is rounded at its own (small) scale; `d = p - c` was rounded
+        // at the distance's. TwoSum recovers that error exactly as `lo`, which
+        // enters `t` and `u` to first order (its square is far below rounding).
         let lo = Vector3::new(
             two_sum_error(p.x, -self.centre.x, d.x),
             two_sum_error(p.y, -self.centre.y, d.y),
             two_sum_error(p.z, -self.centre.z, d.z),
         );
+        let ar = self.a * r;
+        let s = r.dot(&ar);
         let g = self.a * base + self.w;
-        let t0 = ar.dot(&base) + (rw + ar.dot(&lo));
-        let u0 = base.dot(&(g + self.w)) + self.k + 2.0 * lo.dot(&g);
-        (t0, u0)
+        // `t = rᵀ(A b + w) = (Ar)·b + rᵀw` (`A` symmetric), parallel to `g`.
+        let t = ar.dot(&base) + (r.dot(&self.w) + ar.dot(&lo));
+        let u = base.dot(&(g + self.w)) + self.k + 2.0 * lo.dot(&g);
+        if s == 0.0 {
+            linear_set(t, u, lambda0, solid)
+        } else {
+            quadratic_set(s, t, u, difference_of_products(t, t, s, u), lambda0, solid)
+        }
     }
 }
 
