@@ -3,7 +3,7 @@
 use nalgebra::{Matrix3, Matrix4, Point3, Vector3};
 
 use crate::interval::{Bound, IntervalSet};
-use crate::roots::{difference_of_products, stable_roots, two_sum_error};
+use crate::roots::{difference_of_products, exact_sign_of_sum, stable_roots, two_sum_error};
 use crate::{GeometryError, Ray, Transform};
 
 /// A quadric solid, stored around a local centre `c`:
@@ -30,6 +30,9 @@ pub struct Quadric {
     a: Matrix3<f64>,
     w: Vector3<f64>,
     k: f64,
+    /// `A` is positive (`Some(true)`) or negative (`Some(false)`)
+    /// semi-definite, or indefinite (`None`); see [`Quadric::is_convex`].
+    definite: Option<bool>,
 }
 
 impl Quadric {
@@ -37,15 +40,33 @@ impl Quadric {
     /// coefficient into `[1, 2)`: the same solid (the scaling is exact unless
     /// a coefficient is below 2⁻¹⁰²² times the largest), and `f` then
     /// overflows only where `|x - c|²` does, whatever scale the input had.
+    /// `A`'s definiteness is decided exactly.
     fn from_parts(centre: Vector3<f64>, a: Matrix3<f64>, w: Vector3<f64>, k: f64) -> Self {
+        let definite = if semi_definite(&a) {
+            Some(true)
+        } else if semi_definite(&-a) {
+            Some(false)
+        } else {
+            None
+        };
+        Self::with_definiteness(centre, a, w, k, definite)
+    }
+
+    fn with_definiteness(
+        centre: Vector3<f64>,
+        a: Matrix3<f64>,
+        w: Vector3<f64>,
+        k: f64,
+        definite: Option<bool>,
+    ) -> Self {
         let m = a.amax().max(w.amax()).max(k.abs());
         if !(m > 0.0 && m.is_finite()) || (1.0..2.0).contains(&m) {
-            return Quadric { centre, a, w, k };
+            return Quadric { centre, a, w, k, definite };
         }
         // Two factors, each a normal power of two, cover every finite `m`.
         let e = m.log2().floor() as i32;
         let (f1, f2) = (pow2(-e / 2), pow2(-e - (-e / 2)));
-        Quadric { centre, a: a * f1 * f2, w: w * f1 * f2, k: k * f1 * f2 }
+        Quadric { centre, a: a * f1 * f2, w: w * f1 * f2, k: k * f1 * f2, definite }
     }
 
     fn diagonal(a: f64, b: f64, c: f64, k: f64) -> Self {
@@ -129,18 +150,20 @@ impl Quadric {
 
     /// The other side of the surface, `-Q` (exact).
     pub fn complement(&self) -> Self {
-        Self::from_parts(self.centre, -self.a, -self.w, -self.k)
+        Self::with_definiteness(self.centre, -self.a, -self.w, -self.k, self.definite.map(|psd| !psd))
     }
 
     /// The solid moved by `m`: `M⁻ᵀ Q M⁻¹`, computed as `L⁻ᵀ A L⁻¹` for the
-    /// quadratic part while the centre moves exactly by `m`.
+    /// quadratic part while the centre moves exactly by `m`. A congruence
+    /// keeps `A`'s definiteness, so a convex solid stays convex even where
+    /// rounding leaves the stored `L⁻ᵀ A L⁻¹` an eigenvalue of `-ε`.
     pub fn transformed(&self, m: &Transform) -> Self {
         let li = m.linear_inverse();
         let a = li.transpose() * self.a * li;
         // Exact symmetry (the product is symmetric up to rounding only).
         let a = (a + a.transpose()) * 0.5;
         let w = li.transpose() * self.w;
-        Self::from_parts(m.apply_point(&Point3::from(self.centre)).coords, a, w, self.k)
+        Self::with_definiteness(m.apply_point(&Point3::from(self.centre)).coords, a, w, self.k, self.definite)
     }
 
     /// The local centre `c` the coefficients are taken around.
@@ -198,12 +221,16 @@ impl Quadric {
         crate::normal::unit(self.gradient(x))
     }
 
-    /// Whether every ray meets the solid in at most one interval (`A` positive
-    /// semi-definite: ellipsoids, cylinders, paraboloids, slabs).
+    /// Whether every ray meets the solid in at most one interval: `A` is
+    /// positive semi-definite (ellipsoids, cylinders, paraboloids, slabs).
+    ///
+    /// Decided exactly for a quadric built from coefficients or a matrix (all
+    /// principal minors `>= 0`, each summed without rounding), and kept
+    /// through [`transformed`](Self::transformed); `intervals` reads `s = rᵀAr`
+    /// of a convex solid as `max(s, 0)` (and of a concave one as `min(s, 0)`),
+    /// so it never returns more than one interval for a convex solid.
     pub fn is_convex(&self) -> bool {
-        let e = self.a.symmetric_eigenvalues();
-        let scale = self.a.amax();
-        e.iter().all(|&l| l >= -1e-12 * scale)
+        self.definite == Some(true) || self.a == Matrix3::zeros()
     }
 
     /// Whether every coefficient is finite.
@@ -246,7 +273,13 @@ impl Quadric {
             two_sum_error(p.z, -self.centre.z, d.z),
         );
         let ar = self.a * r;
-        let s = r.dot(&ar);
+        // A semi-definite `A` (possibly carried through a transform whose
+        // rounding left an eigenvalue of -ε) gives `s` of one sign only.
+        let s = match self.definite {
+            Some(true) => r.dot(&ar).max(0.0),
+            Some(false) => r.dot(&ar).min(0.0),
+            None => r.dot(&ar),
+        };
         let g = self.a * base + self.w;
         // `t = rᵀ(A b + w) = (Ar)·b + rᵀw` (`A` symmetric), parallel to `g`.
         let t = ar.dot(&base) + (r.dot(&self.w) + ar.dot(&lo));
@@ -257,6 +290,22 @@ impl Quadric {
             quadratic_set(s, t, u, difference_of_products(t, t, s, u), lambda0, solid)
         }
     }
+}
+
+/// Whether the symmetric `m` is positive semi-definite, decided exactly: all
+/// seven principal minors are `>= 0` (for a symmetric matrix this is
+/// equivalent), each evaluated without rounding.
+fn semi_definite(m: &Matrix3<f64>) -> bool {
+    let (a, b, c) = (m[(0, 0)], m[(1, 1)], m[(2, 2)]);
+    let (d, e, f) = (m[(0, 1)], m[(0, 2)], m[(1, 2)]);
+    let minor = |x: f64, y: f64, z: f64| exact_sign_of_sum(&[(1.0, x, y, 1.0), (-1.0, z, z, 1.0)]) >= 0;
+    a >= 0.0
+        && b >= 0.0
+        && c >= 0.0
+        && minor(a, b, d)
+        && minor(a, c, e)
+        && minor(b, c, f)
+        && exact_sign_of_sum(&[(1.0, a, b, c), (2.0, d, e, f), (-1.0, a, f, f), (-1.0, b, e, e), (-1.0, c, d, d)]) >= 0
 }
 
 /// `2^e` for `-1022 <= e <= 1023`.
@@ -332,5 +381,60 @@ fn quadratic_set(s: f64, t: f64, u: f64, disc: f64, lambda0: f64, solid: u32) ->
         whole_ray()
     } else {
         IntervalSet::empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check_semi_definite(rows: [[f64; 3]; 3], expected: bool) {
+        let m = Matrix3::from_fn(|i, j| rows[i][j]);
+        assert_eq!(semi_definite(&m), expected, "{rows:?}");
+    }
+
+    #[test]
+    fn semi_definiteness_is_exact() {
+        let up = 1.0 + f64::EPSILON;
+        check_semi_definite([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], true);
+        check_semi_definite([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]], true);
+        check_semi_definite([[1.0, 0.0, 0.0], [0.0, -1e-300, 0.0], [0.0, 0.0, 1.0]], false);
+        // Rank one: every minor is exactly zero.
+        check_semi_definite([[1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, 1.0, 1.0]], true);
+        // A 2x2 minor of 1 - (1 + ε)² < 0.
+        check_semi_definite([[1.0, up, 0.0], [up, 1.0, 0.0], [0.0, 0.0, 1.0]], false);
+        // Only the determinant is negative: 2x2 minors 1 - 1 = 0, det = -(ε)²-ish.
+        check_semi_definite([[1.0, 1.0, 1.0], [1.0, 1.0, up], [1.0, up, 1.0]], false);
+        check_semi_definite([[2.0, 1.0, 1.0], [1.0, 2.0, 1.0], [1.0, 1.0, 2.0]], true);
+        check_semi_definite([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], false);
+    }
+
+    #[test]
+    fn convexity_survives_transforms_and_flips_with_the_complement() {
+        let turn = Transform::rotate_x_degrees(30.0)
+            .and_then(|r| Ok(r.then(&Transform::rotate_z_degrees(70.0)?)))
+            .expect("valid rotations");
+        for q in [Quadric::sphere(), Quadric::tube_y(), Quadric::paraboloid()] {
+            let moved = q.transformed(&turn);
+            assert!(moved.is_convex(), "{moved:?}");
+            assert!(!moved.complement().is_convex());
+            assert!(moved.complement().complement().is_convex());
+        }
+        for q in [Quadric::cone(), Quadric::hyperboloid_one_sheet(), Quadric::hyperboloid_two_sheets()] {
+            assert!(!q.transformed(&turn).is_convex());
+        }
+        let slightly_waisted = Quadric::from_coefficients([1.0, -1e-13, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0]);
+        assert!(!slightly_waisted.expect("finite").is_convex());
+    }
+
+    #[test]
+    fn coefficients_are_normalised_by_a_power_of_two() {
+        let big = Quadric::from_coefficients([4.0, 4.0, 4.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -12.0]).expect("finite");
+        assert_eq!(big.coefficients(), [0.5, 0.5, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.5]);
+        let tiny = Quadric::sphere().transformed(&Transform::scale(1e-100).expect("valid"));
+        let (_, a, _, k) = tiny.local_parts();
+        assert!((1.0..2.0).contains(&a.amax().max(k.abs())), "{tiny:?}");
+        assert!(tiny.contains_point(&Point3::new(0.0, 0.0, 0.9e-100)));
+        assert!(!tiny.contains_point(&Point3::new(0.0, 0.0, 1.1e-100)));
     }
 }

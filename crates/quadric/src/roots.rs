@@ -19,6 +19,49 @@ pub fn two_sum_error(a: f64, b: f64, sum: f64) -> f64 {
     (a - (sum - bb)) + (b - bb)
 }
 
+/// `a + b` as `(fl(a + b), error)` with `a + b = sum + error` exactly (TwoSum).
+#[inline(always)]
+pub fn two_sum(a: f64, b: f64) -> (f64, f64) {
+    let sum = a + b;
+    (sum, two_sum_error(a, b, sum))
+}
+
+/// `a·b` as `(fl(a·b), error)` with `a·b = product + error` exactly (one FMA;
+/// exact unless the error underflows).
+#[inline(always)]
+pub fn two_product(a: f64, b: f64) -> (f64, f64) {
+    let p = a * b;
+    (p, a.mul_add(b, -p))
+}
+
+/// The sign (-1, 0 or 1) of `Σ ± x·y·z` over `terms = [(sign, x, y, z)]`,
+/// decided exactly: each triple product is split into four doubles without
+/// rounding and the doubles are summed as a nonoverlapping expansion
+/// (Shewchuk's Grow-Expansion), whose largest nonzero component carries the
+/// sign. Exact while no product overflows or underflows. At most 6 terms.
+pub fn exact_sign_of_sum(terms: &[(f64, f64, f64, f64)]) -> i32 {
+    let mut e = [0.0f64; 24];
+    let mut len = 0;
+    for &(sign, x, y, z) in terms.iter().take(6) {
+        let (p, pe) = two_product(sign * x, y);
+        for part in [p, pe] {
+            let (q, qe) = two_product(part, z);
+            for b in [q, qe] {
+                // Grow-Expansion: add `b` exactly, components stay nonoverlapping.
+                let mut acc = b;
+                for c in e.iter_mut().take(len) {
+                    let (sum, err) = two_sum(acc, *c);
+                    *c = err;
+                    acc = sum;
+                }
+                e[len] = acc;
+                len += 1;
+            }
+        }
+    }
+    e[..len].iter().rev().find(|c| **c != 0.0).map_or(0, |c| if *c > 0.0 { 1 } else { -1 })
+}
+
 /// The two real roots of `sλ² + 2tλ + u` given `disc = t² - su >= 0`,
 /// in increasing order, by the stable form `q = -(t + copysign(√disc, t))`,
 /// `λ = q/s` and `u/q`: neither root is formed by cancelling `-t ± √disc`.
