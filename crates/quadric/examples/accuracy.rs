@@ -21,7 +21,7 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use quadric::roots::{difference_of_products, stable_roots};
-use quadric::{Bound, IntervalSet, Quadric, Ray};
+use quadric::{Bound, IntervalSet, Ray};
 use reference::{median_max, other_shapes, unit_sphere, Judge, Rng, Scene, Shape, Tally};
 
 const SEED: u64 = 0x4b6f_6d70_6c65_7801;
@@ -39,8 +39,8 @@ struct World {
 }
 
 impl World {
-    fn new(q: &Quadric) -> World {
-        let [a, b, c, d, e, f, g, h, j, k] = q.coefficients();
+    fn new(scene: &Scene) -> World {
+        let [a, b, c, d, e, f, g, h, j, k] = scene.world_coefficients();
         World { a: [[a, d, e], [d, b, f], [e, f, c]], w: [g, h, j], k }
     }
 
@@ -164,7 +164,7 @@ const JUDGE: Judge = Judge { band_ulps: 4.0 };
 fn measure(shape: &Shape, distance: f64, n: usize, rng: &mut Rng) -> (Row, Scene, Vec<Ray>) {
     let scene = Scene::new(shape, distance, rng);
     let rays = scene.rays(shape, CAMERA * distance.min(1.0), n, rng);
-    let world = World::new(&scene.quadric);
+    let world = World::new(&scene);
     let mut row = Row {
         distance,
         rays: rays.len(),
@@ -182,7 +182,7 @@ fn measure(shape: &Shape, distance: f64, n: usize, rng: &mut Rng) -> (Row, Scene
         row.floor.add_floor(&scene, ray, &exact);
         row.naive.add(&scene, ray, &exact, &world.naive(ray), &JUDGE);
         row.stable.add(&scene, ray, &exact, &world.stable(ray), &JUDGE);
-        row.ours.add(&scene, ray, &exact, &scene.quadric.intervals(ray, 0), &JUDGE);
+        row.ours.add(&scene, ray, &exact, &scene.solid.intervals(ray, 0), &JUDGE);
     }
     (row, scene, rays)
 }
@@ -325,11 +325,11 @@ fn print_cost(timing: &[(f64, Scene, Vec<Ray>)]) {
     println!("| D | naive world-space | stable + FMA | ours (`intervals`) | ours / naive |");
     println!("|---|---|---|---|---|");
     for (distance, scene, rays) in timing {
-        let world = World::new(&scene.quadric);
+        let world = World::new(scene);
         let rays = &rays[..rays.len().min(4096)];
         let t = time_kernels(
             rays,
-            &[&|r: &Ray| world.naive(r), &|r: &Ray| world.stable(r), &|r: &Ray| scene.quadric.intervals(r, 0)],
+            &[&|r: &Ray| world.naive(r), &|r: &Ray| world.stable(r), &|r: &Ray| scene.solid.intervals(r, 0)],
         );
         let (naive, stable, ours) = (t[0], t[1], t[2]);
         println!("| {distance:.0e} | {naive:.1} | {stable:.1} | {ours:.1} | {:.2} |", ours / naive);

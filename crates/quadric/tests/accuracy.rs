@@ -36,7 +36,7 @@ fn check(shape: &Shape, distance: f64, k: f64, seed: u64) {
     for ray in &rays {
         let exact = scene.exact.solve(ray);
         crossings += exact.crossings().len();
-        tally.add(&scene, ray, &exact, &scene.quadric.intervals(ray, 0), &BAND);
+        tally.add(&scene, ray, &exact, &scene.solid.intervals(ray, 0), &BAND);
     }
     let (median, max) = median_max(&tally.ulps);
     let context = format!("{} at distance {distance:e}: median {median:.2} U, max {max:.2} U", shape.name);
@@ -76,8 +76,7 @@ fn world_space_formula_breaks_the_bound() {
     let shape = unit_sphere();
     let mut rng = Rng::new(0x5eed_0200);
     let scene = Scene::new(&shape, 1e6, &mut rng);
-    let [a, b, c, d, e, f, g, h, j, k] = scene.quadric.coefficients();
-    let world = quadric::Quadric::from_coefficients([a, b, c, d, e, f, g, h, j, k]).expect("finite coefficients");
+    let world = quadric::Quadric::from_coefficients(scene.world_coefficients()).expect("finite coefficients");
     let mut tally = Tally::default();
     for ray in scene.rays(&shape, 0.25, 100, &mut rng) {
         let exact = scene.exact.solve(&ray);

@@ -10,7 +10,7 @@
 //! rounded, to [`PRECISION`] bits.
 
 use num_bigint::{BigInt, Sign};
-use quadric::{IntervalSet, Quadric, Ray, NO_SOLID};
+use quadric::{HalfSpace, IntervalSet, Quadric, Ray, Solid, NO_SOLID};
 
 /// Bits kept by the rounded operations (square root, division).
 pub const PRECISION: u64 = 256;
@@ -217,6 +217,26 @@ impl ExactQuadric {
         }
     }
 
+    /// The half-space `n·(x - o) + d <= 0` as the quadric `A = 0`, `w = n/2`
+    /// (halving is exact), around its stored reference point `o`.
+    pub fn half_space(h: &HalfSpace) -> ExactQuadric {
+        let (o, n) = (h.reference_point(), h.normal_vector());
+        ExactQuadric {
+            c: v3([o.x, o.y, o.z]),
+            a: [0, 1, 2].map(|_| v3([0.0; 3])),
+            w: v3([0.5 * n.x, 0.5 * n.y, 0.5 * n.z]),
+            k: Big::from_f64(h.value(&o)),
+        }
+    }
+
+    /// The reference for either kind of solid.
+    pub fn solid(s: &Solid) -> ExactQuadric {
+        match s {
+            Solid::Quadric(q) => ExactQuadric::new(q),
+            Solid::HalfSpace(h) => ExactQuadric::half_space(h),
+        }
+    }
+
     /// `A d + w`, half the gradient at `c + d`.
     fn half_gradient(&self, d: &V3) -> V3 {
         [0, 1, 2].map(|i| &dot(&self.a[i], d) + &self.w[i])
@@ -411,7 +431,7 @@ pub struct Shape {
     /// Name for the tables.
     pub name: &'static str,
     /// The solid in its unit frame, before placement.
-    pub solid: Quadric,
+    pub solid: Solid,
     /// The linear placement (scale, rotation) applied before moving it away.
     pub linear: Transform,
     /// A point inside the unit-frame solid.
@@ -442,7 +462,7 @@ fn rotation(x: f64, y: f64, z: f64) -> Transform {
 pub fn unit_sphere() -> Shape {
     Shape {
         name: "unit sphere",
-        solid: Quadric::sphere(),
+        solid: Quadric::sphere().into(),
         linear: Transform::identity(),
         inside: |rng| rng.in_ball(0.95),
         outside: |rng| rng.direction().map(|c| c * 1.5),
@@ -457,7 +477,7 @@ pub fn other_shapes() -> Vec<Shape> {
     vec![
         Shape {
             name: "ellipsoid 3 × 1 × 0.5, rotated",
-            solid: Quadric::sphere(),
+            solid: Quadric::sphere().into(),
             linear: scale([3.0, 1.0, 0.5]).then(&rotation(20.0, 35.0, 50.0)),
             inside: |rng| rng.in_ball(0.95),
             outside: |rng| rng.direction().map(|c| c * 1.5),
@@ -466,7 +486,7 @@ pub fn other_shapes() -> Vec<Shape> {
         },
         Shape {
             name: "cylinder r = 1, rotated",
-            solid: Quadric::tube_y(),
+            solid: Quadric::tube_y().into(),
             linear: rotation(30.0, 0.0, 70.0),
             inside: |rng| {
                 let radius = 0.95 * rng.unit().sqrt();
@@ -478,7 +498,7 @@ pub fn other_shapes() -> Vec<Shape> {
         },
         Shape {
             name: "one-sheet hyperboloid, rotated",
-            solid: Quadric::hyperboloid_one_sheet(),
+            solid: Quadric::hyperboloid_one_sheet().into(),
             linear: rotation(60.0, 10.0, 25.0),
             inside: |rng| rng.in_ball(0.95),
             outside: |rng| ring(rng, 1.5, (-0.5, 0.5)),
@@ -487,7 +507,7 @@ pub fn other_shapes() -> Vec<Shape> {
         },
         Shape {
             name: "paraboloid, rotated",
-            solid: Quadric::paraboloid(),
+            solid: Quadric::paraboloid().into(),
             linear: rotation(45.0, 45.0, 0.0),
             inside: |rng| {
                 let b = rng.in_ball(0.5);
@@ -498,8 +518,23 @@ pub fn other_shapes() -> Vec<Shape> {
             along_y: false,
         },
         Shape {
+            name: "half-space, rotated",
+            solid: HalfSpace::new(0.0, 1.0, 0.0, 0.0).expect("a valid plane").into(),
+            linear: rotation(15.0, 25.0, 35.0),
+            inside: |rng| {
+                let b = rng.in_ball(1.0);
+                [b[0], -b[1].abs(), b[2]]
+            },
+            outside: |rng| {
+                let b = rng.in_ball(1.0);
+                [b[0], b[1].abs(), b[2]]
+            },
+            size: 1.0,
+            along_y: false,
+        },
+        Shape {
             name: "paraboloid, rays along its axis (s = 0)",
-            solid: Quadric::paraboloid(),
+            solid: Quadric::paraboloid().into(),
             linear: Transform::identity(),
             inside: |rng| {
                 let b = rng.in_ball(0.5);
@@ -515,7 +550,9 @@ pub fn other_shapes() -> Vec<Shape> {
 /// A shape placed at `distance` from the origin in a random direction.
 pub struct Scene {
     /// The placed solid.
-    pub quadric: Quadric,
+    pub solid: Solid,
+    /// Its centre (a half-space's reference point), to which errors are local.
+    pub centre: Point3<f64>,
     /// Its exact reference.
     pub exact: ExactQuadric,
     /// Unit frame to world.
@@ -529,8 +566,24 @@ impl Scene {
     pub fn new(shape: &Shape, distance: f64, rng: &mut Rng) -> Scene {
         let centre = Vector3::from(rng.direction()) * distance;
         let placement = shape.linear.then(&Transform::translate(centre).expect("a finite translation is valid"));
-        let quadric = shape.solid.transformed(&placement);
-        Scene { exact: ExactQuadric::new(&quadric), quadric, placement, size: shape.size }
+        let solid = shape.solid.transformed(&placement);
+        let centre = match &solid {
+            Solid::Quadric(q) => q.centre(),
+            Solid::HalfSpace(h) => h.reference_point(),
+        };
+        Scene { exact: ExactQuadric::solid(&solid), solid, centre, placement, size: shape.size }
+    }
+
+    /// The world-space coefficients `[a, b, c, d, e, f, g, h, j, k]`, as a
+    /// textbook kernel would take them.
+    pub fn world_coefficients(&self) -> [f64; 10] {
+        match &self.solid {
+            Solid::Quadric(q) => q.coefficients(),
+            Solid::HalfSpace(h) => {
+                let v = h.vector();
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5 * v.x, 0.5 * v.y, 0.5 * v.z, v.w]
+            }
+        }
     }
 
     /// The error unit at the point `x`: an ulp of its largest coordinate,
@@ -542,7 +595,7 @@ impl Scene {
 
     /// An ulp of the largest coordinate of `x - c` (the quadric's own scale).
     pub fn local_ulp(&self, x: [f64; 3]) -> f64 {
-        let c = self.quadric.centre();
+        let c = self.centre;
         ulp_of_point([x[0] - c.x, x[1] - c.y, x[2] - c.z])
     }
 
@@ -562,7 +615,7 @@ impl Scene {
         if shape.along_y {
             // From `distance` below the shape straight up its axis: the
             // direction is exact, so `s = rᵀAr` is exactly zero.
-            let c = self.quadric.centre();
+            let c = self.centre;
             let below = c.coords.norm();
             while out.len() < n {
                 let off = rng.in_ball(1.5);
