@@ -320,7 +320,13 @@ fn main() {
 }
 
 fn print_cost(timing: &[(f64, Scene, Vec<Ray>)]) {
-    println!("### Cost, ns per call (unit sphere rays above, best of {COST_ROUNDS} interleaved rounds)");
+    // The machine may be shared: say how busy it was.
+    let load =
+        std::fs::read_to_string("/proc/loadavg").ok().and_then(|l| l.split_whitespace().next().map(String::from));
+    println!(
+        "### Cost, ns per call (unit sphere rays above, best of {COST_ROUNDS} interleaved rounds; load average {})",
+        load.as_deref().unwrap_or("unknown")
+    );
     println!();
     println!("| D | naive world-space | stable + FMA | ours (`intervals`) | ours / naive |");
     println!("|---|---|---|---|---|");

@@ -1,17 +1,18 @@
-//! Accuracy of `Quadric::intervals` against the high-precision reference in
-//! `support/reference.rs` (exact dyadic arithmetic, roots to 256 bits): the
-//! error bound stated in `docs/quadric.md`, "The stated bound".
+//! Accuracy of `Quadric::intervals` (and `HalfSpace::intervals`) against the
+//! high-precision reference in `support/reference.rs` (exact dyadic
+//! arithmetic, roots to 256 bits): the bound stated in `docs/quadric.md` §8.
 //!
-//! With `x*` the exact crossing and `U = ulp(max(|x*|∞, |x* - c|∞))` the
-//! spacing of doubles there (in world space or around the centre `c`,
-//! whichever is coarser):
+//! With `x` the exact crossing and `U = ulp(max(|x|∞, |x - c|∞))` the spacing
+//! of doubles there (in world space or around the centre `c`, whichever is
+//! coarser):
 //! - every crossing that the exact answer and `intervals` both report lies,
 //!   as the double point `ray.at(λ)`, within `K·U` of the true surface, with
-//!   `K = 2` for a camera far from the shape (distance ≥ 1000 sizes: the
-//!   re-based path), and `K = 8` for a camera at the shape (distance 1);
+//!   `K = 1.5` for a camera far from the shape (distance >= 1000 sizes) and
+//!   `K = 8` for a camera at the shape (distance 1);
 //! - `intervals` reports more or fewer crossings than exist (a false hit or
-//!   miss) only for rays whose line passes within `2U` of touching the
-//!   surface (measured at the apex `-t/s`) or that start within `2U` of it.
+//!   miss) only for rays whose line passes within 1 ulp of the local
+//!   coordinates `x - c` of touching the surface (measured at the apex
+//!   `-t/s`), or that start within 1 such ulp of it.
 //!
 //! The rounding floor itself (the exact crossing rounded to doubles) reaches
 //! about `0.87 U`.
