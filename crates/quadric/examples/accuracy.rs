@@ -28,7 +28,7 @@ const SEED: u64 = 0x4b6f_6d70_6c65_7801;
 const SPHERE_RAYS: usize = 20_000;
 const SHAPE_RAYS: usize = 5_000;
 const CAMERA: f64 = 0.25;
-const COST_ROUNDS: usize = 20;
+const COST_ROUNDS: usize = 60;
 
 /// A quadric as its ten world-space coefficients, the way a textbook kernel sees it.
 #[derive(Clone, Copy)]
@@ -235,7 +235,7 @@ fn print_detail_table(rows: &[Row], label: &str) {
 
 /// Nanoseconds per call of `f` over `rays`, one round.
 fn time_round(rays: &[Ray], f: &dyn Fn(&Ray) -> IntervalSet) -> f64 {
-    let repeats = 500_000 / rays.len().max(1);
+    let repeats = 200_000 / rays.len().max(1);
     let start = Instant::now();
     for _ in 0..repeats {
         for ray in rays {
@@ -307,7 +307,7 @@ fn main() {
     println!();
 
     for shape in other_shapes() {
-        let rows: Vec<Row> = [1e3, 1e6, 1e9].iter().map(|&d| measure(&shape, d, SHAPE_RAYS, &mut rng).0).collect();
+        let rows: Vec<Row> = [1.0, 1e3, 1e6, 1e9].iter().map(|&d| measure(&shape, d, SHAPE_RAYS, &mut rng).0).collect();
         println!("### {} at distance D", shape.name);
         println!();
         print_radii_table(&rows, "D");
