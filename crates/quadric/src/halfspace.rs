@@ -3,7 +3,7 @@
 use nalgebra::{Point3, Vector3, Vector4};
 
 use crate::interval::{Bound, IntervalSet};
-use crate::roots::two_sum_error;
+use crate::roots::{dot2, two_sum_error};
 use crate::{GeometryError, Ray, Transform};
 
 /// A half-space `n·(x - o) + d <= 0` with `n = (a, b, c)`, stored around a
@@ -101,7 +101,7 @@ impl HalfSpace {
     /// inside the half-space: the allocation-free fast path blocks use.
     #[inline(always)]
     pub fn interval(&self, ray: &Ray, solid: u32) -> (Bound, Bound) {
-        let t = self.normal.dot(&ray.direction());
+        let t = self.slope(&ray.direction());
         // `u` is taken at the ray's point `λ₀` nearest to `o`, so the root is
         // as accurate far away as near (see `docs/quadric.md`).
         let (lambda0, u) = self.value_near(ray);
@@ -127,6 +127,19 @@ impl HalfSpace {
         } else {
             (Bound::new(root, solid), Bound::free(f64::INFINITY))
         }
+    }
+
+    /// `t = n·r`; nearly parallel to the plane it cancels from `|n|` down to
+    /// `|n| sin θ`, and is then recomputed compensated (Dot2) so that its
+    /// sign, and the far root `-u/t`, stay right.
+    #[inline(always)]
+    fn slope(&self, r: &Vector3<f64>) -> f64 {
+        let t = self.normal.dot(r);
+        if t.abs() >= self.normal.amax() / 16.0 {
+            return t;
+        }
+        let (t, t_lo) = dot2(&self.normal, r);
+        t + t_lo
     }
 
     /// `(λ₀, f(p + λ₀r))` for the foot `λ₀ = -r·(p - o)` of the perpendicular

@@ -3,7 +3,7 @@
 use nalgebra::{Matrix3, Matrix4, Point3, Vector3};
 
 use crate::interval::{Bound, IntervalSet};
-use crate::roots::{difference_of_products, exact_sign_of_sum, stable_roots, two_sum_error};
+use crate::roots::{difference_of_products, dot2, exact_sign_of_sum, stable_roots, two_sum_error};
 use crate::{GeometryError, Ray, Transform};
 
 /// A quadric solid, stored around a local centre `c`:
@@ -33,6 +33,9 @@ pub struct Quadric {
     /// `A` is positive (`Some(true)`) or negative (`Some(false)`)
     /// semi-definite, or indefinite (`None`); see [`Quadric::is_convex`].
     definite: Option<bool>,
+    /// Below this `|s|` the ray is nearly along a flat direction of `A` and
+    /// `s`, `t` are recomputed compensated (`max |A_ij| / 16`).
+    flat: f64,
 }
 
 impl Quadric {
@@ -60,13 +63,15 @@ impl Quadric {
         definite: Option<bool>,
     ) -> Self {
         let m = a.amax().max(w.amax()).max(k.abs());
-        if !(m > 0.0 && m.is_finite()) || (1.0..2.0).contains(&m) {
-            return Quadric { centre, a, w, k, definite };
-        }
-        // Two factors, each a normal power of two, cover every finite `m`.
-        let e = m.log2().floor() as i32;
-        let (f1, f2) = (pow2(-e / 2), pow2(-e - (-e / 2)));
-        Quadric { centre, a: a * f1 * f2, w: w * f1 * f2, k: k * f1 * f2, definite }
+        let (a, w, k) = if !(m > 0.0 && m.is_finite()) || (1.0..2.0).contains(&m) {
+            (a, w, k)
+        } else {
+            // Two factors, each a normal power of two, cover every finite `m`.
+            let e = m.log2().floor() as i32;
+            let (f1, f2) = (pow2(-e / 2), pow2(-e - (-e / 2)));
+            (a * f1 * f2, w * f1 * f2, k * f1 * f2)
+        };
+        Quadric { centre, a, w, k, definite, flat: a.amax() / 16.0 }
     }
 
     fn diagonal(a: f64, b: f64, c: f64, k: f64) -> Self {
@@ -273,22 +278,49 @@ impl Quadric {
             two_sum_error(p.z, -self.centre.z, d.z),
         );
         let ar = self.a * r;
+        let rw = r.dot(&self.w);
+        let s = r.dot(&ar);
+        // `t = rᵀ(A b + w) = (Ar)·b + rᵀw` (`A` symmetric), in parallel to `g`.
+        let (s, t) = if s.abs() >= self.flat {
+            (s, ar.dot(&base) + (rw + ar.dot(&lo)))
+        } else {
+            self.nearly_flat_s_t(&r, &base, &lo, rw)
+        };
         // A semi-definite `A` (possibly carried through a transform whose
         // rounding left an eigenvalue of -ε) gives `s` of one sign only.
         let s = match self.definite {
-            Some(true) => r.dot(&ar).max(0.0),
-            Some(false) => r.dot(&ar).min(0.0),
-            None => r.dot(&ar),
+            Some(true) => s.max(0.0),
+            Some(false) => s.min(0.0),
+            None => s,
         };
         let g = self.a * base + self.w;
-        // `t = rᵀ(A b + w) = (Ar)·b + rᵀw` (`A` symmetric), parallel to `g`.
-        let t = ar.dot(&base) + (r.dot(&self.w) + ar.dot(&lo));
         let u = base.dot(&(g + self.w)) + self.k + 2.0 * lo.dot(&g);
         if s == 0.0 {
             linear_set(t, u, lambda0, solid)
         } else {
             quadratic_set(s, t, u, difference_of_products(t, t, s, u), lambda0, solid)
         }
+    }
+
+    /// `s` and `t` for a ray nearly along a direction in which the quadric is
+    /// flat (a cylinder's or paraboloid's axis, a cone's generator): there
+    /// `Ar` and `s = rᵀAr` cancel from `|A|` down to `|A| sin θ` and
+    /// `|A| sin² θ`, and rounded at `|A|` they would move a hit at distance
+    /// `ρ ~ 1/sin θ` by `ε ρ³`. Compensated dot products (Ogita, Rump, Oishi:
+    /// `Dot2`) make them accurate to a few ulps of their own size.
+    #[cold]
+    #[inline(never)]
+    fn nearly_flat_s_t(&self, r: &Vector3<f64>, base: &Vector3<f64>, lo: &Vector3<f64>, rw: f64) -> (f64, f64) {
+        let mut ar = Vector3::zeros();
+        let mut ar_lo = Vector3::zeros();
+        for i in 0..3 {
+            (ar[i], ar_lo[i]) = dot2(&self.a.row(i).transpose(), r);
+        }
+        let (s, s_lo) = dot2(r, &ar);
+        let s = s + (s_lo + r.dot(&ar_lo));
+        let (t, t_lo) = dot2(&ar, base);
+        let t = t + (t_lo + ar_lo.dot(base) + rw + ar.dot(lo));
+        (s, t)
     }
 }
 

@@ -1,5 +1,7 @@
 //! Numerically careful building blocks for `sλ² + 2tλ + u <= 0`.
 
+use nalgebra::Vector3;
+
 /// `a·b - c·d` with one rounding error (Kahan's algorithm with FMA):
 /// the error of the naive form, which cancels catastrophically when
 /// `a·b ≈ c·d`, is recovered exactly by the fused multiply-add.
@@ -60,6 +62,20 @@ pub fn exact_sign_of_sum(terms: &[(f64, f64, f64, f64)]) -> i32 {
         }
     }
     e[..len].iter().rev().find(|c| **c != 0.0).map_or(0, |c| if *c > 0.0 { 1 } else { -1 })
+}
+
+/// `x·y` as `(sum, error)`: the sum rounded, and an estimate of its rounding
+/// error good to about twice the working precision (Dot2).
+#[inline(always)]
+pub fn dot2(x: &Vector3<f64>, y: &Vector3<f64>) -> (f64, f64) {
+    let (mut sum, mut err) = two_product(x.x, y.x);
+    for i in 1..3 {
+        let (p, pe) = two_product(x[i], y[i]);
+        let (s, se) = two_sum(sum, p);
+        sum = s;
+        err += pe + se;
+    }
+    (sum, err)
 }
 
 /// The two real roots of `sλ² + 2tλ + u` given `disc = t² - su >= 0`,

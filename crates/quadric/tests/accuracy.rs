@@ -8,11 +8,13 @@
 //! - every crossing that the exact answer and `intervals` both report lies,
 //!   as the double point `ray.at(λ)`, within `K·U` of the true surface, with
 //!   `K = 1.5` for a camera far from the shape (distance >= 1000 sizes) and
-//!   `K = 8` for a camera at the shape (distance 1);
+//!   `K = 16` for a camera at the shape (distance 1), where the rounding of
+//!   `f` itself, amplified by the shape's anisotropy, is no longer hidden
+//!   below the ulps of the far hit point;
 //! - `intervals` reports more or fewer crossings than exist (a false hit or
-//!   miss) only for rays whose line passes within 1 ulp of the local
+//!   miss) only for rays whose line passes within 4 ulps of the local
 //!   coordinates `x - c` of touching the surface (measured at the apex
-//!   `-t/s`), or that start within 1 such ulp of it.
+//!   `-t/s`), or that start within 4 such ulps of it.
 //!
 //! The rounding floor itself (the exact crossing rounded to doubles) reaches
 //! about `0.87 U`.
@@ -26,7 +28,7 @@ use reference::{median_max, other_shapes, unit_sphere, Judge, Rng, Scene, Shape,
 /// Rays per shape and distance: the reference costs some microseconds per
 /// ray at the test profile's opt-level.
 const RAYS: usize = 1000;
-const BAND: Judge = Judge { band_ulps: 1.0 };
+const BAND: Judge = Judge { band_ulps: 4.0 };
 
 fn check(shape: &Shape, distance: f64, k: f64, seed: u64) {
     let mut rng = Rng::new(seed);
@@ -53,7 +55,7 @@ fn check(shape: &Shape, distance: f64, k: f64, seed: u64) {
 }
 
 fn check_distances(shape: &Shape, seed: u64) {
-    check(shape, 1.0, 8.0, seed);
+    check(shape, 1.0, 16.0, seed);
     for (i, distance) in [1e3, 1e6, 1e9].into_iter().enumerate() {
         check(shape, distance, 1.5, seed + 1 + i as u64);
     }

@@ -426,6 +426,20 @@ impl Rng {
 // ---------------------------------------------------------------------------
 // Scenes: shapes placed far away, rays from a camera near the origin.
 
+/// How [`Scene::rays`] aims its rays.
+#[derive(Clone, Copy, PartialEq)]
+pub enum Aim {
+    /// From a camera near the world origin at points inside the shape, one in
+    /// three bisected towards a tangent ray.
+    Inside,
+    /// Exactly along the unit frame's y axis (`s = 0` for a paraboloid), from
+    /// `distance` below the shape.
+    AlongY,
+    /// From inside the shape near its centre, tilted from its unit frame's y
+    /// axis by `10⁻⁵ … 10⁻¹` (nearly along a cylinder's axis: `s ≈ 0`).
+    NearlyAlongY,
+}
+
 /// A shape in its unit frame with samplers for points inside and outside.
 pub struct Shape {
     /// Name for the tables.
@@ -440,9 +454,8 @@ pub struct Shape {
     pub outside: fn(&mut Rng) -> [f64; 3],
     /// The shape's size: errors are reported in these units ("radii").
     pub size: f64,
-    /// Rays exactly along the unit frame's y axis (`s = 0` for a paraboloid)
-    /// from `distance` below the shape, instead of rays from the origin.
-    pub along_y: bool,
+    /// How the rays are aimed.
+    pub aim: Aim,
 }
 
 use quadric::nalgebra::{Point3, Vector3};
@@ -467,7 +480,7 @@ pub fn unit_sphere() -> Shape {
         inside: |rng| rng.in_ball(0.95),
         outside: |rng| rng.direction().map(|c| c * 1.5),
         size: 1.0,
-        along_y: false,
+        aim: Aim::Inside,
     }
 }
 
@@ -482,7 +495,7 @@ pub fn other_shapes() -> Vec<Shape> {
             inside: |rng| rng.in_ball(0.95),
             outside: |rng| rng.direction().map(|c| c * 1.5),
             size: 1.0,
-            along_y: false,
+            aim: Aim::Inside,
         },
         Shape {
             name: "cylinder r = 1, rotated",
@@ -494,7 +507,7 @@ pub fn other_shapes() -> Vec<Shape> {
             },
             outside: |rng| ring(rng, 1.5, (-2.0, 2.0)),
             size: 1.0,
-            along_y: false,
+            aim: Aim::Inside,
         },
         Shape {
             name: "one-sheet hyperboloid, rotated",
@@ -503,7 +516,7 @@ pub fn other_shapes() -> Vec<Shape> {
             inside: |rng| rng.in_ball(0.95),
             outside: |rng| ring(rng, 1.5, (-0.5, 0.5)),
             size: 1.0,
-            along_y: false,
+            aim: Aim::Inside,
         },
         Shape {
             name: "paraboloid, rotated",
@@ -515,7 +528,7 @@ pub fn other_shapes() -> Vec<Shape> {
             },
             outside: |rng| ring(rng, 1.5, (0.0, 1.0)),
             size: 1.0,
-            along_y: false,
+            aim: Aim::Inside,
         },
         Shape {
             name: "half-space, rotated",
@@ -530,7 +543,16 @@ pub fn other_shapes() -> Vec<Shape> {
                 [b[0], b[1].abs(), b[2]]
             },
             size: 1.0,
-            along_y: false,
+            aim: Aim::Inside,
+        },
+        Shape {
+            name: "cylinder r = 1, rotated, rays from inside nearly along its axis (s ≈ 0)",
+            solid: Quadric::tube_y().into(),
+            linear: rotation(30.0, 0.0, 70.0),
+            inside: |rng| rng.in_ball(0.5),
+            outside: |rng| ring(rng, 1.5, (-2.0, 2.0)),
+            size: 1.0,
+            aim: Aim::NearlyAlongY,
         },
         Shape {
             name: "paraboloid, rays along its axis (s = 0)",
@@ -542,7 +564,7 @@ pub fn other_shapes() -> Vec<Shape> {
             },
             outside: |rng| ring(rng, 1.5, (0.0, 1.0)),
             size: 1.0,
-            along_y: true,
+            aim: Aim::AlongY,
         },
     ]
 }
@@ -612,7 +634,16 @@ impl Scene {
         let world = |p: [f64; 3]| self.placement.apply_point(&Point3::from(p));
         let aim = |o: Point3<f64>, x: Point3<f64>| Ray::new(o, x - o).ok();
         let mut out = Vec::with_capacity(n);
-        if shape.along_y {
+        if shape.aim == Aim::NearlyAlongY {
+            let axis = self.placement.apply_vector(&Vector3::y());
+            while out.len() < n {
+                let o = self.placement.apply_point(&Point3::from(rng.in_ball(0.5)));
+                let tilt = 10f64.powf(rng.range(-5.0, -1.0));
+                out.extend(Ray::new(o, axis + Vector3::from(rng.direction()) * tilt).ok());
+            }
+            return out;
+        }
+        if shape.aim == Aim::AlongY {
             // From `distance` below the shape straight up its axis: the
             // direction is exact, so `s = rᵀAr` is exactly zero.
             let c = self.centre;
