@@ -246,10 +246,14 @@ fn time_round(rays: &[Ray], f: &dyn Fn(&Ray) -> IntervalSet) -> f64 {
 }
 
 /// Nanoseconds per call of each kernel, best of interleaved rounds (the
-/// machine may be shared: the minimum is the least disturbed round).
+/// machine may be shared: the minimum is the least disturbed round). Each
+/// round copies the rays to a new offset, since some address layouts make
+/// every kernel slower (stores of the result aliasing loads of the next ray).
 fn time_kernels(rays: &[Ray], kernels: &[&dyn Fn(&Ray) -> IntervalSet]) -> Vec<f64> {
     let mut best = vec![f64::INFINITY; kernels.len()];
-    for _ in 0..COST_ROUNDS {
+    for round in 0..COST_ROUNDS {
+        let shifted: Vec<Ray> = rays[..round % 7].iter().chain(rays).copied().collect();
+        let rays = &shifted[round % 7..];
         for (b, f) in best.iter_mut().zip(kernels) {
             *b = b.min(time_round(rays, *f));
         }
