@@ -181,7 +181,9 @@ impl Quadric {
         &self.a
     }
 
-    /// The world-space matrix `Q` (for export; loses accuracy far from the origin).
+    /// The world-space matrix `Q` (for export; loses accuracy far from the
+    /// origin). Like every stored coefficient it is the input's up to a
+    /// power-of-two factor (see [`local_parts`](Self::local_parts)).
     pub fn matrix(&self) -> Matrix4<f64> {
         let c = self.centre;
         let ac = self.a * c;
@@ -201,6 +203,10 @@ impl Quadric {
     }
 
     /// The coefficients relative to the local centre, as `(c, A, w, k)`.
+    ///
+    /// They are stored scaled by a power of two that brings the largest of
+    /// them into `[1, 2)`: the same solid, with `f` in range wherever
+    /// `|x - c|²` is.
     pub fn local_parts(&self) -> (Point3<f64>, Matrix3<f64>, Vector3<f64>, f64) {
         (Point3::from(self.centre), self.a, self.w, self.k)
     }
