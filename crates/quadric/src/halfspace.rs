@@ -3,6 +3,7 @@
 use nalgebra::{Point3, Vector3, Vector4};
 
 use crate::interval::{Bound, IntervalSet};
+use crate::roots::{dot2, two_sum_error};
 use crate::{GeometryError, Ray, Transform};
 
 /// A half-space `n·(x - o) + d <= 0` with `n = (a, b, c)`, stored around a
@@ -100,8 +101,10 @@ impl HalfSpace {
     /// inside the half-space: the allocation-free fast path blocks use.
     #[inline(always)]
     pub fn interval(&self, ray: &Ray, solid: u32) -> (Bound, Bound) {
-        let t = self.normal.dot(&ray.direction());
-        let u = self.value(&ray.origin());
+        let t = self.slope(&ray.direction());
+        // `u` is taken at the ray's point `λ₀` nearest to `o`, so the root is
+        // as accurate far away as near (see `docs/quadric.md`).
+        let (lambda0, u) = self.value_near(ray);
         let none = (Bound::free(f64::INFINITY), Bound::free(f64::INFINITY));
         let all = (Bound::free(0.0), Bound::free(f64::INFINITY));
         if t == 0.0 || !t.is_finite() {
@@ -111,6 +114,7 @@ impl HalfSpace {
         if !root.is_finite() {
             return if u <= 0.0 { all } else { none };
         }
+        let root = lambda0 + root;
         if t > 0.0 {
             // Inside before the plane.
             if root < 0.0 {
@@ -123,5 +127,38 @@ impl HalfSpace {
         } else {
             (Bound::new(root, solid), Bound::free(f64::INFINITY))
         }
+    }
+
+    /// `t = n·r`; nearly parallel to the plane it cancels from `|n|` down to
+    /// `|n| sin θ`, and is then recomputed compensated (Dot2) so that its
+    /// sign, and the far root `-u/t`, stay right.
+    #[inline(always)]
+    fn slope(&self, r: &Vector3<f64>) -> f64 {
+        let t = self.normal.dot(r);
+        if t.abs() >= self.normal.amax() / 16.0 {
+            return t;
+        }
+        let (t, t_lo) = dot2(&self.normal, r);
+        t + t_lo
+    }
+
+    /// `(λ₀, f(p + λ₀r))` for the foot `λ₀ = -r·(p - o)` of the perpendicular
+    /// from `o` onto the ray, the same exact re-basing as
+    /// `Quadric::intervals`: the base point `(p - o) + λ₀r` is formed by one
+    /// FMA at the scale of `|x - o|` for any point `x` of the line, and the
+    /// rounding of `p - o` (half an ulp of the distance) is recovered by
+    /// TwoSum and added back.
+    #[inline(always)]
+    fn value_near(&self, ray: &Ray) -> (f64, f64) {
+        let (p, r) = (ray.origin().coords, ray.direction());
+        let d = p - self.origin;
+        let lambda0 = -r.dot(&d);
+        let base = Vector3::new(lambda0.mul_add(r.x, d.x), lambda0.mul_add(r.y, d.y), lambda0.mul_add(r.z, d.z));
+        let lo = Vector3::new(
+            two_sum_error(p.x, -self.origin.x, d.x),
+            two_sum_error(p.y, -self.origin.y, d.y),
+            two_sum_error(p.z, -self.origin.z, d.z),
+        );
+        (lambda0, self.normal.dot(&base) + (self.d + self.normal.dot(&lo)))
     }
 }

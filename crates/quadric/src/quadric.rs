@@ -3,7 +3,7 @@
 use nalgebra::{Matrix3, Matrix4, Point3, Vector3};
 
 use crate::interval::{Bound, IntervalSet};
-use crate::roots::{difference_of_products, stable_roots};
+use crate::roots::{difference_of_products, dot2, exact_sign_of_sum, stable_roots, two_sum_error};
 use crate::{GeometryError, Ray, Transform};
 
 /// A quadric solid, stored around a local centre `c`:
@@ -30,11 +30,48 @@ pub struct Quadric {
     a: Matrix3<f64>,
     w: Vector3<f64>,
     k: f64,
+    /// `A` is positive (`Some(true)`) or negative (`Some(false)`)
+    /// semi-definite, or indefinite (`None`); see [`Quadric::is_convex`].
+    definite: Option<bool>,
+    /// Below this `|s|` the ray is nearly along a flat direction of `A` and
+    /// `s`, `t` are recomputed compensated (`max |A_ij| / 16`).
+    flat: f64,
 }
 
 impl Quadric {
+    /// Stores the parts scaled by a power of two that brings the largest
+    /// coefficient into `[1, 2)`: the same solid (the scaling is exact unless
+    /// a coefficient is below 2⁻¹⁰²² times the largest), and `f` then
+    /// overflows only where `|x - c|²` does, whatever scale the input had.
+    /// `A`'s definiteness is decided exactly.
     fn from_parts(centre: Vector3<f64>, a: Matrix3<f64>, w: Vector3<f64>, k: f64) -> Self {
-        Quadric { centre, a, w, k }
+        let definite = if semi_definite(&a) {
+            Some(true)
+        } else if semi_definite(&-a) {
+            Some(false)
+        } else {
+            None
+        };
+        Self::with_definiteness(centre, a, w, k, definite)
+    }
+
+    fn with_definiteness(
+        centre: Vector3<f64>,
+        a: Matrix3<f64>,
+        w: Vector3<f64>,
+        k: f64,
+        definite: Option<bool>,
+    ) -> Self {
+        let m = a.amax().max(w.amax()).max(k.abs());
+        let (a, w, k) = if !(m > 0.0 && m.is_finite()) || (1.0..2.0).contains(&m) {
+            (a, w, k)
+        } else {
+            // Two factors, each a normal power of two, cover every finite `m`.
+            let e = m.log2().floor() as i32;
+            let (f1, f2) = (pow2(-e / 2), pow2(-e - (-e / 2)));
+            (a * f1 * f2, w * f1 * f2, k * f1 * f2)
+        };
+        Quadric { centre, a, w, k, definite, flat: a.amax() / 16.0 }
     }
 
     fn diagonal(a: f64, b: f64, c: f64, k: f64) -> Self {
@@ -118,18 +155,20 @@ impl Quadric {
 
     /// The other side of the surface, `-Q` (exact).
     pub fn complement(&self) -> Self {
-        Self::from_parts(self.centre, -self.a, -self.w, -self.k)
+        Self::with_definiteness(self.centre, -self.a, -self.w, -self.k, self.definite.map(|psd| !psd))
     }
 
     /// The solid moved by `m`: `M⁻ᵀ Q M⁻¹`, computed as `L⁻ᵀ A L⁻¹` for the
-    /// quadratic part while the centre moves exactly by `m`.
+    /// quadratic part while the centre moves exactly by `m`. A congruence
+    /// keeps `A`'s definiteness, so a convex solid stays convex even where
+    /// rounding leaves the stored `L⁻ᵀ A L⁻¹` an eigenvalue of `-ε`.
     pub fn transformed(&self, m: &Transform) -> Self {
         let li = m.linear_inverse();
         let a = li.transpose() * self.a * li;
         // Exact symmetry (the product is symmetric up to rounding only).
         let a = (a + a.transpose()) * 0.5;
         let w = li.transpose() * self.w;
-        Self::from_parts(m.apply_point(&Point3::from(self.centre)).coords, a, w, self.k)
+        Self::with_definiteness(m.apply_point(&Point3::from(self.centre)).coords, a, w, self.k, self.definite)
     }
 
     /// The local centre `c` the coefficients are taken around.
@@ -142,7 +181,9 @@ impl Quadric {
         &self.a
     }
 
-    /// The world-space matrix `Q` (for export; loses accuracy far from the origin).
+    /// The world-space matrix `Q` (for export; loses accuracy far from the
+    /// origin). Like every stored coefficient it is the input's up to a
+    /// power-of-two factor (see [`local_parts`](Self::local_parts)).
     pub fn matrix(&self) -> Matrix4<f64> {
         let c = self.centre;
         let ac = self.a * c;
@@ -162,14 +203,17 @@ impl Quadric {
     }
 
     /// The coefficients relative to the local centre, as `(c, A, w, k)`.
+    ///
+    /// They are stored scaled by a power of two that brings the largest of
+    /// them into `[1, 2)`: the same solid, with `f` in range wherever
+    /// `|x - c|²` is.
     pub fn local_parts(&self) -> (Point3<f64>, Matrix3<f64>, Vector3<f64>, f64) {
         (Point3::from(self.centre), self.a, self.w, self.k)
     }
 
     /// `f(x)`, evaluated relative to the centre. The solid is `f <= 0`.
     pub fn value(&self, x: &Point3<f64>) -> f64 {
-        let d = x.coords - self.centre;
-        d.dot(&(self.a * d + self.w)) + self.w.dot(&d) + self.k
+        self.value_at_offset(&(x.coords - self.centre))
     }
 
     /// Whether `x` lies in the closed solid.
@@ -188,12 +232,16 @@ impl Quadric {
         crate::normal::unit(self.gradient(x))
     }
 
-    /// Whether every ray meets the solid in at most one interval (`A` positive
-    /// semi-definite: ellipsoids, cylinders, paraboloids, slabs).
+    /// Whether every ray meets the solid in at most one interval: `A` is
+    /// positive semi-definite (ellipsoids, cylinders, paraboloids, slabs).
+    ///
+    /// Decided exactly for a quadric built from coefficients or a matrix (all
+    /// principal minors `>= 0`, each summed without rounding), and kept
+    /// through [`transformed`](Self::transformed); `intervals` reads `s = rᵀAr`
+    /// of a convex solid as `max(s, 0)` (and of a concave one as `min(s, 0)`),
+    /// so it never returns more than one interval for a convex solid.
     pub fn is_convex(&self) -> bool {
-        let e = self.a.symmetric_eigenvalues();
-        let scale = self.a.amax();
-        e.iter().all(|&l| l >= -1e-12 * scale)
+        self.definite == Some(true) || self.a == Matrix3::zeros()
     }
 
     /// Whether every coefficient is finite.
@@ -201,83 +249,230 @@ impl Quadric {
         self.a.iter().chain(self.w.iter()).chain(self.centre.iter()).all(|c| c.is_finite()) && self.k.is_finite()
     }
 
-    /// The coefficients `t` and `u` of `f(p + λr) = sλ² + 2tλ + u` for the
-    /// ray origin taken relative to the centre, `d = p - c`.
+    /// `f(c + d)`, the value at an offset `d` from the centre.
     #[inline(always)]
-    fn tu(&self, d: &Vector3<f64>, r: &Vector3<f64>) -> (f64, f64) {
-        let g = self.a * d + self.w;
-        (r.dot(&g), d.dot(&(g + self.w)) + self.k)
+    fn value_at_offset(&self, d: &Vector3<f64>) -> f64 {
+        d.dot(&(self.a * d + self.w + self.w)) + self.k
     }
 
     /// The set of `λ >= 0` with `p + λr` inside the solid; every finite end
     /// carries `solid` as the surface it lies on.
     ///
-    /// Numerics (see `docs/quadric.md`): coefficients relative to the local
-    /// centre; stable roots; `t² - su` by a fused difference of products;
-    /// and when the roots cluster far along the ray (`|t² - su| < t²/4`, the
-    /// case where `t² - su` cancels), the ray is re-based at the midpoint
-    /// `λ₀ = -t/s` and the quadratic re-solved there, so the result stays
-    /// within a small multiple of the rounding floor of the hit point.
+    /// `f(p + λr) = sλ² + 2tλ + u` with `s = rᵀAr`, `t = rᵀ(A(p-c) + w)`,
+    /// `u = f(p)`, solved by the table of SPEC §2. Numerics (see
+    /// `docs/quadric.md`): coefficients relative to the local centre `c`;
+    /// the ray re-based exactly at the foot of the perpendicular from `c`,
+    /// near the roots, so that nothing cancels however far the ray starts;
+    /// `t² - su` by a fused difference of products; stable roots.
     pub fn intervals(&self, ray: &Ray, solid: u32) -> IntervalSet {
-        let r = ray.direction();
-        let d = ray.origin().coords - self.centre;
+        let (p, r) = (ray.origin().coords, ray.direction());
+        let d = p - self.centre;
+        // The foot of the perpendicular from the centre, `λ₀ = -r·d`. Any `λ₀`
+        // gives the same quadratic in `λ - λ₀`; this one puts the base point
+        // within the quadric's own scale of the roots (`|x - c|² = |b|² + ρ²`
+        // for a root `x = c + b + ρr`, so `|ρ| <= |x - c|`), costs no division
+        // and is never far off even where `s ≈ 0` puts the apex `-t/s` at
+        // infinity.
+        let lambda0 = -r.dot(&d);
+        let base = Vector3::new(lambda0.mul_add(r.x, d.x), lambda0.mul_add(r.y, d.y), lambda0.mul_add(r.z, d.z));
+        // `base` is rounded at its own (small) scale; `d = p - c` was rounded
+        // at the distance's. TwoSum recovers that error exactly as `lo`, which
+        // enters `t` and `u` to first order (its square is far below rounding).
+        let lo = Vector3::new(
+            two_sum_error(p.x, -self.centre.x, d.x),
+            two_sum_error(p.y, -self.centre.y, d.y),
+            two_sum_error(p.z, -self.centre.z, d.z),
+        );
         let ar = self.a * r;
+        let rw = r.dot(&self.w);
         let s = r.dot(&ar);
-        let (t, u) = self.tu(&d, &r);
-        let set = if s == 0.0 {
-            linear_set(t, u, solid)
+        // `t = rᵀ(A b + w) = (Ar)·b + rᵀw` (`A` symmetric), in parallel to `g`.
+        let (s, t) = if s.abs() >= self.flat {
+            (s, ar.dot(&base) + (rw + ar.dot(&lo)))
         } else {
-            let disc = difference_of_products(t, t, s, u);
-            let (lambda0, t, u, disc) = if disc.abs() < 0.25 * t * t {
-                // Re-base at the midpoint of the roots: there t ≈ 0 and u is
-                // small, so nothing cancels.
-                let l0 = -t / s;
-                let d0 = Vector3::new(l0.mul_add(r.x, d.x), l0.mul_add(r.y, d.y), l0.mul_add(r.z, d.z));
-                let (t0, u0) = self.tu(&d0, &r);
-                (l0, t0, u0, difference_of_products(t0, t0, s, u0))
-            } else {
-                (0.0, t, u, disc)
-            };
-            quadratic_set(s, t, u, disc, lambda0, solid)
+            self.nearly_flat_s_t(&r, &base, &lo, rw)
         };
-        set.clip(0.0, f64::INFINITY)
+        // A semi-definite `A` (possibly carried through a transform whose
+        // rounding left an eigenvalue of -ε) gives `s` of one sign only.
+        let s = match self.definite {
+            Some(true) => s.max(0.0),
+            Some(false) => s.min(0.0),
+            None => s,
+        };
+        let g = self.a * base + self.w;
+        let u = base.dot(&(g + self.w)) + self.k + 2.0 * lo.dot(&g);
+        if s == 0.0 {
+            linear_set(t, u, lambda0, solid)
+        } else {
+            quadratic_set(s, t, u, difference_of_products(t, t, s, u), lambda0, solid)
+        }
+    }
+
+    /// `s` and `t` for a ray nearly along a direction in which the quadric is
+    /// flat (a cylinder's or paraboloid's axis, a cone's generator): there
+    /// `Ar` and `s = rᵀAr` cancel from `|A|` down to `|A| sin θ` and
+    /// `|A| sin² θ`, and rounded at `|A|` they would move a hit at distance
+    /// `ρ ~ 1/sin θ` by `ε ρ³`. Compensated dot products (Ogita, Rump, Oishi:
+    /// `Dot2`) make them accurate to a few ulps of their own size.
+    #[cold]
+    #[inline(never)]
+    fn nearly_flat_s_t(&self, r: &Vector3<f64>, base: &Vector3<f64>, lo: &Vector3<f64>, rw: f64) -> (f64, f64) {
+        let mut ar = Vector3::zeros();
+        let mut ar_lo = Vector3::zeros();
+        for i in 0..3 {
+            (ar[i], ar_lo[i]) = dot2(&self.a.row(i).transpose(), r);
+        }
+        let (s, s_lo) = dot2(r, &ar);
+        let s = s + (s_lo + r.dot(&ar_lo));
+        let (t, t_lo) = dot2(&ar, base);
+        let t = t + (t_lo + ar_lo.dot(base) + rw + ar.dot(lo));
+        (s, t)
     }
 }
 
-/// `{λ : 2tλ + u <= 0}` (the `s = 0` rows of the table).
-#[inline]
-fn linear_set(t: f64, u: f64, solid: u32) -> IntervalSet {
+/// Whether the symmetric `m` is positive semi-definite, decided exactly: all
+/// seven principal minors are `>= 0` (for a symmetric matrix this is
+/// equivalent), each evaluated without rounding.
+fn semi_definite(m: &Matrix3<f64>) -> bool {
+    let (a, b, c) = (m[(0, 0)], m[(1, 1)], m[(2, 2)]);
+    let (d, e, f) = (m[(0, 1)], m[(0, 2)], m[(1, 2)]);
+    let minor = |x: f64, y: f64, z: f64| exact_sign_of_sum(&[(1.0, x, y, 1.0), (-1.0, z, z, 1.0)]) >= 0;
+    a >= 0.0
+        && b >= 0.0
+        && c >= 0.0
+        && minor(a, b, d)
+        && minor(a, c, e)
+        && minor(b, c, f)
+        && exact_sign_of_sum(&[(1.0, a, b, c), (2.0, d, e, f), (-1.0, a, f, f), (-1.0, b, e, e), (-1.0, c, d, d)]) >= 0
+}
+
+/// `2^e` for `-1022 <= e <= 1023`.
+fn pow2(e: i32) -> f64 {
+    f64::from_bits(((e + 1023) as u64) << 52)
+}
+
+// The sets below are built already clipped to the ray, `λ >= 0`, in one
+// construction: an `IntervalSet` is a few hundred bytes, and building it
+// whole and then clipping it copies it twice. They agree with
+// `set.clip(0.0, ∞)` of the unclipped set: a clipped end is free at `+0.0`, a
+// root at exactly zero keeps its solid, and no end is `-0.0` (`x + 0.0`).
+
+/// The whole ray, `[0, ∞)`.
+#[inline(always)]
+fn whole_ray() -> IntervalSet {
+    IntervalSet::from_interval(Bound::free(0.0), Bound::free(f64::INFINITY))
+}
+
+/// `(-∞, root] ∩ [0, ∞)`.
+#[inline(always)]
+fn up_to(root: f64, solid: u32) -> IntervalSet {
+    IntervalSet::from_interval(Bound::free(0.0), Bound::new(root + 0.0, solid))
+}
+
+/// `[root, ∞) ∩ [0, ∞)`.
+#[inline(always)]
+fn from(root: f64, solid: u32) -> IntervalSet {
+    let enter = if root >= 0.0 { Bound::new(root + 0.0, solid) } else { Bound::free(0.0) };
+    IntervalSet::from_interval(enter, Bound::free(f64::INFINITY))
+}
+
+/// `{λ >= 0 : 2tλ + u <= 0}` (the `s = 0` rows of the table), for the ray
+/// re-based at `lambda0`.
+#[inline(always)]
+fn linear_set(t: f64, u: f64, lambda0: f64, solid: u32) -> IntervalSet {
     if !(t.is_finite() && u.is_finite()) {
         return IntervalSet::empty();
     }
     if t == 0.0 {
-        return if u <= 0.0 { IntervalSet::everything() } else { IntervalSet::empty() };
+        return if u <= 0.0 { whole_ray() } else { IntervalSet::empty() };
     }
-    let root = -u / (2.0 * t);
+    let root = lambda0 + -u / (2.0 * t);
     if t > 0.0 {
-        IntervalSet::from_interval(Bound::free(f64::NEG_INFINITY), Bound::new(root, solid))
+        up_to(root, solid)
     } else {
-        IntervalSet::from_interval(Bound::new(root, solid), Bound::free(f64::INFINITY))
+        from(root, solid)
     }
 }
 
-/// `{λ : sλ² + 2tλ + u <= 0}` for `s != 0`, shifted by `lambda0`.
-#[inline]
+/// `{λ >= 0 : sλ² + 2tλ + u <= 0}` for `s != 0`, for the ray re-based at
+/// `lambda0`.
+#[inline(always)]
 fn quadratic_set(s: f64, t: f64, u: f64, disc: f64, lambda0: f64, solid: u32) -> IntervalSet {
     if !(disc.is_finite() && lambda0.is_finite()) {
         return IntervalSet::empty();
     }
     if disc < 0.0 {
-        return if s > 0.0 { IntervalSet::empty() } else { IntervalSet::everything() };
+        return if s > 0.0 { IntervalSet::empty() } else { whole_ray() };
     }
     let (r1, r2) = stable_roots(s, t, u, disc);
     let (l1, l2) = (lambda0 + r1, lambda0 + r2);
     if s > 0.0 {
-        IntervalSet::from_interval(Bound::new(l1, solid), Bound::new(l2, solid))
+        let enter = if l1 >= 0.0 { Bound::new(l1 + 0.0, solid) } else { Bound::free(0.0) };
+        IntervalSet::from_interval(enter, Bound::new(l2 + 0.0, solid))
+    } else if l1 < l2 && l1 > 0.0 {
+        // Two disjoint pieces, `[0, l1]` and `[l2, ∞)`: within capacity.
+        up_to(l1, solid).union(&from(l2, solid)).unwrap_or_else(|_| whole_ray())
+    } else if l1 < l2 {
+        from(l2, solid)
+    } else if l1 == l2 {
+        // The pieces touch (a tangent ray from outside): the whole line.
+        whole_ray()
     } else {
-        let low = IntervalSet::from_interval(Bound::free(f64::NEG_INFINITY), Bound::new(l1, solid));
-        let high = IntervalSet::from_interval(Bound::new(l2, solid), Bound::free(f64::INFINITY));
-        // Two disjoint pieces (or, if they touch, the whole line): within capacity.
-        low.union(&high).unwrap_or_else(|_| IntervalSet::everything())
+        IntervalSet::empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check_semi_definite(rows: [[f64; 3]; 3], expected: bool) {
+        let m = Matrix3::from_fn(|i, j| rows[i][j]);
+        assert_eq!(semi_definite(&m), expected, "{rows:?}");
+    }
+
+    #[test]
+    fn semi_definiteness_is_exact() {
+        let up = 1.0 + f64::EPSILON;
+        check_semi_definite([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], true);
+        check_semi_definite([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]], true);
+        check_semi_definite([[1.0, 0.0, 0.0], [0.0, -1e-300, 0.0], [0.0, 0.0, 1.0]], false);
+        // Rank one: every minor is exactly zero.
+        check_semi_definite([[1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, 1.0, 1.0]], true);
+        // A 2x2 minor of 1 - (1 + ε)² < 0.
+        check_semi_definite([[1.0, up, 0.0], [up, 1.0, 0.0], [0.0, 0.0, 1.0]], false);
+        // Only the determinant is negative: 2x2 minors 1 - 1 = 0, det = -(ε)²-ish.
+        check_semi_definite([[1.0, 1.0, 1.0], [1.0, 1.0, up], [1.0, up, 1.0]], false);
+        check_semi_definite([[2.0, 1.0, 1.0], [1.0, 2.0, 1.0], [1.0, 1.0, 2.0]], true);
+        check_semi_definite([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], false);
+    }
+
+    #[test]
+    fn convexity_survives_transforms_and_flips_with_the_complement() {
+        let turn = Transform::rotate_x_degrees(30.0)
+            .and_then(|r| Ok(r.then(&Transform::rotate_z_degrees(70.0)?)))
+            .expect("valid rotations");
+        for q in [Quadric::sphere(), Quadric::tube_y(), Quadric::paraboloid()] {
+            let moved = q.transformed(&turn);
+            assert!(moved.is_convex(), "{moved:?}");
+            assert!(!moved.complement().is_convex());
+            assert!(moved.complement().complement().is_convex());
+        }
+        for q in [Quadric::cone(), Quadric::hyperboloid_one_sheet(), Quadric::hyperboloid_two_sheets()] {
+            assert!(!q.transformed(&turn).is_convex());
+        }
+        let slightly_waisted = Quadric::from_coefficients([1.0, -1e-13, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0]);
+        assert!(!slightly_waisted.expect("finite").is_convex());
+    }
+
+    #[test]
+    fn coefficients_are_normalised_by_a_power_of_two() {
+        let big = Quadric::from_coefficients([4.0, 4.0, 4.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -12.0]).expect("finite");
+        assert_eq!(big.coefficients(), [0.5, 0.5, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.5]);
+        let tiny = Quadric::sphere().transformed(&Transform::scale(1e-100).expect("valid"));
+        let (_, a, _, k) = tiny.local_parts();
+        assert!((1.0..2.0).contains(&a.amax().max(k.abs())), "{tiny:?}");
+        assert!(tiny.contains_point(&Point3::new(0.0, 0.0, 0.9e-100)));
+        assert!(!tiny.contains_point(&Point3::new(0.0, 0.0, 1.1e-100)));
     }
 }
