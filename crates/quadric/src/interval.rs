@@ -184,8 +184,8 @@ impl IntervalSet {
     /// merging it with the last one if they touch. Empty intervals are ignored.
     #[inline]
     fn push(&mut self, iv: Interval) -> Result<(), CapacityError> {
-        // `!(a < b)` also rejects NaN.
-        if !(iv.enter.t < iv.exit.t) {
+        // Empty, inverted or NaN intervals are dropped.
+        if iv.enter.t.partial_cmp(&iv.exit.t) != Some(core::cmp::Ordering::Less) {
             return Ok(());
         }
         if let Some(last) = self.items[..self.len as usize].last_mut() {

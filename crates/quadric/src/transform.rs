@@ -142,7 +142,7 @@ impl Transform {
         }
         let residual =
             (linear * inverse - Matrix3::identity()).amax().max((inverse * linear - Matrix3::identity()).amax());
-        if !(residual <= 1e-9) {
+        if residual.is_nan() || residual > 1e-9 {
             return Err(GeometryError::Singular { reason: "the matrix is too close to singular" });
         }
         Ok(Transform { linear, inverse, translation })

@@ -1,0 +1,6 @@
+//! The quadric crate's integration tests, one binary; each topic lives in its own file.
+
+mod bad_input;
+mod laws;
+mod oracle;
+mod table;
