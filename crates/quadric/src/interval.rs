@@ -286,8 +286,15 @@ impl IntervalSet {
     }
 
     /// The part of the set inside `[lo, hi]`; clipped ends carry no solid.
+    /// An end at `-0.0` comes out as `+0.0`, so a ray's sets never show `-0`.
     pub fn clip(&self, lo: f64, hi: f64) -> Self {
-        self.intersect_interval(Bound::free(lo), Bound::free(hi))
+        let mut out = self.intersect_interval(Bound::free(lo), Bound::free(hi));
+        for iv in &mut out.items[..out.len as usize] {
+            // `x + 0.0` is `x` except that it maps -0.0 to +0.0.
+            iv.enter.t += 0.0;
+            iv.exit.t += 0.0;
+        }
+        out
     }
 
     /// Keeps only the intervals for which `keep` is true.

@@ -146,6 +146,35 @@ fn bad_transforms() {
 }
 
 #[test]
+fn unit_normals() {
+    use quadric::normal::unit;
+    // A NaN component is caught even though `amax` skips it.
+    for bad in NON_FINITE {
+        assert_eq!(unit(Vector3::new(bad, 1.0, 0.0)), None);
+        assert_eq!(unit(Vector3::new(1.0, 0.0, bad)), None);
+    }
+    assert_eq!(unit(Vector3::new(0.0, -0.0, 0.0)), None);
+    assert_eq!(unit(Vector3::new(0.0, 0.0, -5e-324)), Some(-Vector3::z()));
+    assert_eq!(unit(Vector3::new(1e308, 0.0, 0.0)), Some(Vector3::x()));
+    let n = unit(Vector3::new(1e308, 1e308, 1e308)).expect("finite");
+    assert!((n.norm() - 1.0).abs() <= 2.0 * f64::EPSILON);
+    // A cone's apex has no normal; a half-space has one everywhere.
+    assert_eq!(Quadric::cone().normal(&Point3::origin()), None);
+    let h = HalfSpace::new(0.0, 0.0, -1e-300, 1.0).expect("valid");
+    assert_eq!(Solid::from(h).normal(&Point3::new(1e300, 0.0, 0.0)), Some(-Vector3::z()));
+}
+
+#[test]
+fn reversed_far_beyond_range() {
+    let ray = Ray::new(Point3::new(1e300, 0.0, 0.0), Vector3::x()).expect("valid");
+    assert!(non_finite(ray.try_reversed_at(f64::INFINITY)));
+    assert!(non_finite(ray.try_reversed_at(f64::NAN)));
+    assert!(non_finite(ray.try_reversed_at(f64::MAX)));
+    let back = ray.try_reversed_at(1e300).expect("finite");
+    assert_eq!((back.origin(), back.direction()), (Point3::new(2e300, 0.0, 0.0), -Vector3::x()));
+}
+
+#[test]
 fn overflowing_compositions() {
     // Each step is fine; the composition is not.
     let big = Transform::scale(1e200).expect("valid");

@@ -413,6 +413,15 @@ fn negative_zero_components() {
     check(tube, ray([0.0, 0.0, 0.0], Y), &[(0.0, INF)]);
     check(tube, ray([0.0, 0.0, 0.0], [0.0, -1.0, 0.0]), &[(0.0, INF)]);
     check(half(-0.0, 1.0, 0.0, -1.0), ray([0.0, 5.0, 0.0], NEG_Y), &[(4.0, INF)]);
+    // Roots of -0.0 come out as +0.0 (`check` rejects an end at -0.0): on the plane
+    // y = 0 with d = -0.0 from the origin (-0, -0, -0), u = -0.0 and -u/t = 0/(-1) = -0.0.
+    let origin = [-0.0, -0.0, -0.0];
+    check(half(0.0, 1.0, 0.0, -0.0), ray(origin, NEG_Y), &[(0.0, INF)]);
+    check_tags(half(0.0, 1.0, 0.0, -0.0).intervals(&ray(origin, NEG_Y), 2), &[(Some(2), None)]);
+    // The same plane as a quadric, 2·0.5·y - 0.0 <= 0: s = 0 and -u/(2t) = -0.0.
+    let plane = coefficients([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0, -0.0]);
+    check(plane, ray(origin, NEG_Y), &[(0.0, INF)]);
+    check_tags(plane.intervals(&ray(origin, NEG_Y), 2), &[(Some(2), None)]);
 }
 
 #[test]
