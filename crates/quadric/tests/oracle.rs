@@ -144,80 +144,141 @@ fn mirrored(set: &IntervalSet, l: f64) -> IntervalSet {
     IntervalSet::from_intervals(items).expect("a clipped solid's set fits")
 }
 
+/// The kernel's set agrees with the sign of `f` wherever that sign is clear,
+/// every finite end is a root of `f` up to rounding, ends carry the right
+/// solid, and a convex solid gives at most one interval.
+fn agrees_with_the_sign_of_f(solid: Solid, ray: Ray, extra: &[f64]) -> Result<(), TestCaseError> {
+    let set = solid.intervals(&ray, 3);
+    prop_assert!(set.is_normalised(), "{:?}", set);
+    let w = world(&solid);
+    for lambda in samples(&set, extra) {
+        if let Some(inside) = clear_side(&w, &ray, lambda) {
+            prop_assert_eq!(
+                set.contains(lambda),
+                inside,
+                "λ = {}: f = {:?}, set {:?}",
+                lambda,
+                eval(&w, &ray.at(lambda), pad(&ray, lambda)),
+                set
+            );
+        }
+    }
+    for b in set.iter().flat_map(|iv| [iv.enter, iv.exit]) {
+        prop_assert!(b.t >= 0.0, "{:?}", b);
+        if b.t.is_infinite() {
+            prop_assert_eq!(b.solid, NO_SOLID);
+        } else if b.solid == NO_SOLID {
+            // Only the start of a ray that begins inside is free.
+            prop_assert_eq!(b.t, 0.0);
+            prop_assert_ne!(clear_side(&w, &ray, 0.0), Some(false), "free start outside: {:?}", set);
+        } else {
+            prop_assert_eq!(b.solid, 3);
+            let (f, bound) = eval(&w, &ray.at(b.t), pad(&ray, b.t));
+            prop_assert!(f.abs() <= 4.0 * bound, "end {} is no root: f = {} > {}; {:?}", b.t, f, bound, set);
+        }
+    }
+    prop_assert!(set.len() <= solid.max_intervals(), "{:?} has more pieces than {}", set, solid.max_intervals());
+    Ok(())
+}
+
+/// A solid and its complement split the ray: together everything, shared
+/// nothing, except when the ray lies in the surface (f ≡ 0 along it),
+/// where both closed solids hold the whole ray.
+fn complement_splits(solid: Solid, ray: Ray, extra: &[f64]) -> Result<(), TestCaseError> {
+    let set = solid.intervals(&ray, 0);
+    let other = solid.complement().intervals(&ray, 1);
+    prop_assert!(other.is_normalised());
+    let whole = IntervalSet::from_interval(Bound::free(0.0), Bound::free(INF));
+    if set.same_points(&whole) && other.same_points(&whole) {
+        let w = world(&solid);
+        for &lambda in extra {
+            prop_assert_eq!(clear_side(&w, &ray, lambda), None, "the ray is not in the surface at λ = {}", lambda);
+        }
+    } else {
+        // The two sets should meet exactly; when the re-based `t` is exactly
+        // zero they can miss by an ulp (see `complement_meets_exactly_when_t_is_zero`).
+        // So: no overlap or gap longer than a few ulps of the ends.
+        let shared = set.intersect(&other).expect("fits");
+        let gaps = set.union(&other).expect("fits").complement().expect("fits");
+        let scale = set
+            .iter()
+            .chain(other.iter())
+            .flat_map(|iv| [iv.enter.t, iv.exit.t])
+            .filter(|t| t.is_finite())
+            .fold(1.0, f64::max);
+        let ulps = 8.0 * EPS * scale;
+        prop_assert!(
+            measure(&shared) <= ulps && measure(&gaps) <= ulps,
+            "{:?} vs {:?}: overlap {:?}, gaps {:?}",
+            set,
+            other,
+            shared,
+            gaps
+        );
+    }
+    Ok(())
+}
+
+/// Reversing the ray at `L` mirrors the set on `[0, L]`: `λ ↦ L - λ`.
+fn reversal_mirrors(solid: Solid, ray: Ray, l: f64, extra: &[f64]) -> Result<(), TestCaseError> {
+    let back = ray.reversed_at(l);
+    let (set, rev) = (solid.intervals(&ray, 0), solid.intervals(&back, 0));
+    let w = world(&solid);
+    for &lambda in extra.iter().filter(|&&x| x <= l) {
+        if clear_side(&w, &ray, lambda).is_some() && clear_side(&w, &back, l - lambda).is_some() {
+            prop_assert_eq!(
+                set.contains(lambda),
+                rev.contains(l - lambda),
+                "λ = {}, L = {}: {:?} vs {:?}",
+                lambda,
+                l,
+                set,
+                rev
+            );
+        }
+    }
+    // The ends agree up to rounding: the two sets differ on a negligible length.
+    let (a, b) = (set.clip(0.0, l), mirrored(&rev, l));
+    let differ = measure(&a.union(&b).expect("fits")) - measure(&a.intersect(&b).expect("fits"));
+    let tol = 1e-6 * (1.0 + l + ray.origin().coords.amax());
+    prop_assert!(differ <= tol, "{:?} vs mirrored {:?} differ on {}", a, b, differ);
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { failure_persistence: None, ..ProptestConfig::default() })]
 
-    /// The kernel's set agrees with the sign of `f` wherever that sign is clear,
-    /// every finite end is a root of `f` up to rounding, and ends carry the right solid.
     #[test]
     fn intervals_agree_with_the_sign_of_f(solid in strategies::solid(), ray in strategies::ray(6.0), extra in sample_params()) {
-        let set = solid.intervals(&ray, 3);
-        prop_assert!(set.is_normalised(), "{:?}", set);
-        let w = world(&solid);
-        for lambda in samples(&set, &extra) {
-            if let Some(inside) = clear_side(&w, &ray, lambda) {
-                prop_assert_eq!(set.contains(lambda), inside, "λ = {}: f = {:?}, set {:?}", lambda, eval(&w, &ray.at(lambda), pad(&ray, lambda)), set);
-            }
-        }
-        for b in set.iter().flat_map(|iv| [iv.enter, iv.exit]) {
-            prop_assert!(b.t >= 0.0, "{:?}", b);
-            if b.t.is_infinite() {
-                prop_assert_eq!(b.solid, NO_SOLID);
-            } else if b.solid == NO_SOLID {
-                // Only the start of a ray that begins inside is free.
-                prop_assert_eq!(b.t, 0.0);
-                prop_assert_ne!(clear_side(&w, &ray, 0.0), Some(false), "free start outside: {:?}", set);
-            } else {
-                prop_assert_eq!(b.solid, 3);
-                let (f, bound) = eval(&w, &ray.at(b.t), pad(&ray, b.t));
-                prop_assert!(f.abs() <= 4.0 * bound, "end {} is no root: f = {} > {}; {:?}", b.t, f, bound, set);
-            }
-        }
+        agrees_with_the_sign_of_f(solid, ray, &extra)?;
     }
 
-    /// A solid and its complement split the ray: together everything, shared
-    /// nothing — except when the ray lies in the surface (f ≡ 0 along it),
-    /// where both closed solids hold the whole ray.
+    /// Exact solids and grid rays: tangents, rays in the surface, `s = 0`, `t = 0`.
+    #[test]
+    fn grid_intervals_agree_with_the_sign_of_f(solid in strategies::grid_solid(), ray in strategies::grid_ray(3), extra in sample_params()) {
+        agrees_with_the_sign_of_f(solid, ray, &extra)?;
+    }
+
     #[test]
     fn complement_splits_the_ray(solid in strategies::solid(), ray in strategies::ray(6.0), extra in sample_params()) {
-        let set = solid.intervals(&ray, 0);
-        let other = solid.complement().intervals(&ray, 1);
-        prop_assert!(other.is_normalised());
-        let whole = IntervalSet::from_interval(Bound::free(0.0), Bound::free(INF));
-        if set.same_points(&whole) && other.same_points(&whole) {
-            let w = world(&solid);
-            for lambda in extra {
-                prop_assert_eq!(clear_side(&w, &ray, lambda), None, "the ray is not in the surface at λ = {}", lambda);
-            }
-        } else {
-            // The two sets should meet exactly; when the re-based `t` is exactly
-            // zero they can miss by an ulp (see `complement_meets_exactly_when_t_is_zero`).
-            // So: no overlap or gap longer than a few ulps of the ends.
-            let shared = set.intersect(&other).expect("fits");
-            let gaps = set.union(&other).expect("fits").complement().expect("fits");
-            let scale = set.iter().chain(other.iter()).flat_map(|iv| [iv.enter.t, iv.exit.t]).filter(|t| t.is_finite()).fold(1.0, f64::max);
-            let ulps = 8.0 * EPS * scale;
-            prop_assert!(measure(&shared) <= ulps && measure(&gaps) <= ulps, "{:?} vs {:?}: overlap {:?}, gaps {:?}", set, other, shared, gaps);
-        }
+        complement_splits(solid, ray, &extra)?;
     }
 
-    /// Reversing the ray at `L` mirrors the set on `[0, L]`: `λ ↦ L - λ`.
+    #[test]
+    fn grid_complement_splits_the_ray(solid in strategies::grid_solid(), ray in strategies::grid_ray(3), extra in sample_params()) {
+        complement_splits(solid, ray, &extra)?;
+    }
+
     #[test]
     fn reversing_mirrors_the_set(solid in strategies::solid(), ray in strategies::ray(6.0), l in 1.0f64..50.0, extra in sample_params()) {
-        let back = ray.reversed_at(l);
-        let (set, rev) = (solid.intervals(&ray, 0), solid.intervals(&back, 0));
-        let w = world(&solid);
-        for lambda in extra.into_iter().filter(|&x| x <= l) {
-            if clear_side(&w, &ray, lambda).is_some() && clear_side(&w, &back, l - lambda).is_some() {
-                prop_assert_eq!(set.contains(lambda), rev.contains(l - lambda), "λ = {}, L = {}: {:?} vs {:?}", lambda, l, set, rev);
-            }
-        }
-        // The ends agree up to rounding: the two sets differ on a negligible length.
-        let (a, b) = (set.clip(0.0, l), mirrored(&rev, l));
-        let differ = measure(&a.union(&b).expect("fits")) - measure(&a.intersect(&b).expect("fits"));
-        let tol = 1e-6 * (1.0 + l + ray.origin().coords.amax());
-        prop_assert!(differ <= tol, "{:?} vs mirrored {:?} differ on {}", a, b, differ);
+        reversal_mirrors(solid, ray, l, &extra)?;
     }
+
+    #[test]
+    fn grid_reversing_mirrors_the_set(solid in strategies::grid_solid(), ray in strategies::grid_ray(3), l in 1.0f64..50.0, extra in sample_params()) {
+        reversal_mirrors(solid, ray, l, &extra)?;
+    }
+
 
     /// Applying a transform and then its inverse gives the point back.
     #[test]
