@@ -273,7 +273,9 @@ impl IntervalSet {
         let mut out = Self::empty();
         let mut start = Bound::free(lo);
         for iv in self.iter() {
-            out.push(Interval::new(start, Bound::new(iv.enter.t.min(hi), iv.enter.solid)), false)?;
+            // A gap cut off at `hi` ends at no surface.
+            let end = if iv.enter.t <= hi { iv.enter } else { Bound::free(hi) };
+            out.push(Interval::new(start, end), false)?;
             start = if iv.exit.t > lo { iv.exit } else { Bound::free(lo) };
         }
         out.push(Interval::new(start, Bound::free(hi)), false)?;

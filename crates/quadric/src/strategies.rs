@@ -131,7 +131,7 @@ pub fn elementary_transform() -> impl Strategy<Value = Transform> + Clone {
 
 /// A composition of up to four elementary steps.
 pub fn transform() -> impl Strategy<Value = Transform> + Clone {
-    proptest::collection::vec(elementary_transform(), 0..4)
+    proptest::collection::vec(elementary_transform(), 0..=4)
         .prop_map(|steps| steps.iter().fold(Transform::identity(), |m, s| m.then(s)))
 }
 

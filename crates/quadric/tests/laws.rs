@@ -210,6 +210,21 @@ proptest! {
         prop_assert_eq!(pairs(&one), merged(pairs(&a).iter().map(|&(lo, hi)| (lo.max(-2.0), hi.min(3.0))).collect()));
     }
 
+    // The complement within any window [lo, hi] is the gaps of the set there;
+    // its ends come from the set or are free ends at lo and hi.
+    #[test]
+    fn complement_within_a_window(a in interval_set(4), lo in -44i32..44, len in 1i32..40) {
+        let (lo, hi) = (f64::from(lo) / 4.0, f64::from(lo + len) / 4.0);
+        let gaps = a.complement_within(lo, hi).expect("at most five gaps");
+        prop_assert!(gaps.is_normalised(), "{:?}", gaps);
+        for e in ends(&gaps) {
+            prop_assert!(ends(&a).contains(&e) || (e.solid().is_none() && (e.t == lo || e.t == hi)), "{:?} in {:?}", e, gaps);
+        }
+        for x in probes().filter(|&x| x != lo && x != hi) {
+            prop_assert_eq!(gaps.contains(x), lo < x && x < hi && !a.contains(x), "{} in {:?} vs {:?}", x, a, gaps);
+        }
+    }
+
     // `retain` keeps a normalised subset in order.
     #[test]
     fn retain_keeps_order(a in interval_set(8), cut in -10.0f64..10.0) {

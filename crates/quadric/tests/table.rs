@@ -322,6 +322,20 @@ fn transformed_solids() {
     let m = translate(10.0, 0.0, 0.0).then(&Transform::scale(2.0).expect("valid"));
     check(Quadric::sphere().transformed(&m), ray([0.0, 0.0, 0.0], X), &[(18.0, 22.0)]);
 
+    // A general (sheared) matrix: (x, y, z) ↦ (x + y, y, z). At y = 0.5 the ball
+    // has x² <= 0.75, moved to x' = x + 0.5, so λ = 5.5 ∓ √0.75 from x' = -5.
+    #[rustfmt::skip]
+    let shear = Transform::from_matrix(&nalgebra::Matrix4::new(
+        1.0, 1.0, 0.0, 0.0,
+        0.0, 1.0, 0.0, 0.0,
+        0.0, 0.0, 1.0, 0.0,
+        0.0, 0.0, 0.0, 1.0,
+    ))
+    .expect("invertible");
+    check(Quadric::sphere().transformed(&shear), ray([-5.0, 0.5, 0.0], X), &[(5.5 - h, 5.5 + h)]);
+    // The plane x <= 0 sheared is x' - y <= 0: at y = 2, x' <= 2.
+    check(half(1.0, 0.0, 0.0, 0.0).transformed(&shear), ray([-5.0, 2.0, 0.0], X), &[(0.0, 7.0)]);
+
     // A half-space moved: y <= 1 turned 90° about z becomes -x <= 1, moved by 5 in x: x >= 4.
     let m = Transform::rotate_z_degrees(90.0).expect("valid").then(&translate(5.0, 0.0, 0.0));
     check(half(0.0, 1.0, 0.0, -1.0).transformed(&m), ray([0.0, 0.0, 0.0], X), &[(4.0, INF)]);
@@ -434,4 +448,33 @@ fn reversed_rays() {
     check(Quadric::sphere(), back, &[(4.0, 6.0)]);
     // From (0.5, 0, 0) along -x, inside the ball: outside again where 0.5 - λ <= -1.
     check(Quadric::sphere().complement(), forward.reversed_at(5.5), &[(1.5, INF)]);
+}
+
+#[test]
+fn pieces_per_solid() {
+    // Convex solids meet a ray in at most one interval, the others in up to two.
+    let one: [Solid; 6] = [
+        Quadric::sphere().into(),
+        Quadric::tube_x().into(),
+        Quadric::tube_z().into(),
+        Quadric::paraboloid().into(),
+        half(1.0, 2.0, 3.0, 4.0).into(),
+        half(1.0, 2.0, 3.0, 4.0).complement().into(),
+    ];
+    let two: [Solid; 6] = [
+        Quadric::cone().into(),
+        Quadric::hyperboloid_one_sheet().into(),
+        Quadric::hyperboloid_two_sheets().into(),
+        Quadric::sphere().complement().into(),
+        Quadric::tube_y().complement().into(),
+        Quadric::paraboloid().complement().into(),
+    ];
+    for s in one {
+        assert_eq!(s.max_intervals(), 1, "{s:?}");
+    }
+    for s in two {
+        assert_eq!(s.max_intervals(), 2, "{s:?}");
+    }
+    // The outside of the paraboloid really has two pieces across it: at y = 1, x² >= 1.
+    check(Quadric::paraboloid().complement(), ray([-5.0, 1.0, 0.0], X), &[(0.0, 4.0), (6.0, INF)]);
 }
