@@ -19,9 +19,9 @@ const INF: f64 = f64::INFINITY;
 /// A solid as plain world-space numbers, with what is needed to bound the
 /// rounding error of evaluating it.
 enum World {
-    /// `[a, b, c, d, e, f, g, h, j, k]`, and the error of those coefficients
-    /// (they are formed from the local centre form).
-    Quadric([f64; 10], f64),
+    /// `[a, b, c, d, e, f, g, h, j, k]`, with error bounds for `k` and for
+    /// `(g, h, j)` (formed from the local centre form; `A` is exact).
+    Quadric([f64; 10], f64, Vector3<f64>),
     /// `[a, b, c, d]` and the error of `d`.
     Plane([f64; 4], f64),
 }
@@ -30,10 +30,12 @@ fn world(solid: &Solid) -> World {
     match solid {
         Solid::Quadric(q) => {
             let (c, a, w, k) = q.local_parts();
-            let c = c.coords.abs();
-            // Error of k' = cᵀAc - 2wᵀc + k and of the linear terms (A c): a few ulps of the sizes involved.
-            let err = 8.0 * EPS * (c.dot(&(a.abs() * c)) + 2.0 * w.abs().dot(&c) + k.abs() + a.abs().max() * c.amax());
-            World::Quadric(q.coefficients(), err)
+            let (c, a) = (c.coords.abs(), a.abs());
+            // `(g, h, j) = w - A c` and `k' = cᵀAc - 2wᵀc + k`, each a few
+            // roundings of the sizes involved.
+            let dg = (a * c + w.abs()) * (8.0 * EPS);
+            let dk = 8.0 * EPS * (c.dot(&(a * c)) + 2.0 * w.abs().dot(&c) + k.abs());
+            World::Quadric(q.coefficients(), dk, dg)
         }
         Solid::HalfSpace(h) => {
             let v = h.vector();
@@ -46,9 +48,10 @@ fn world(solid: &Solid) -> World {
 /// `f(x)` from the world coefficients, and a bound on its error when `x` is
 /// itself rounded by up to `pad` per coordinate.
 fn eval(w: &World, x: &Point3<f64>, pad: f64) -> (f64, f64) {
+    let ax = x.coords.abs();
     let (x, y, z) = (x.x, x.y, x.z);
     match *w {
-        World::Quadric([a, b, c, d, e, f, g, h, j, k], err) => {
+        World::Quadric([a, b, c, d, e, f, g, h, j, k], dk, dg) => {
             let terms = [
                 a * x * x,
                 b * y * y,
@@ -63,14 +66,12 @@ fn eval(w: &World, x: &Point3<f64>, pad: f64) -> (f64, f64) {
             ];
             let value: f64 = terms.iter().sum();
             let size: f64 = terms.iter().map(|t| t.abs()).sum();
-            let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
+            let (ax, ay, az) = (ax.x, ax.y, ax.z);
             let grad = 2.0
                 * ((a.abs() * ax + d.abs() * ay + e.abs() * az + g.abs())
                     + (d.abs() * ax + b.abs() * ay + f.abs() * az + h.abs())
                     + (e.abs() * ax + f.abs() * ay + c.abs() * az + j.abs()));
-            // Coefficients big enough relative to the point move f by err
-            // times (1 + |x|²) at most.
-            let coeff = err * (1.0 + ax * ax + ay * ay + az * az);
+            let coeff = dk + 2.0 * (dg.x * ax + dg.y * ay + dg.z * az);
             (value, 32.0 * EPS * size + coeff + 4.0 * grad * pad)
         }
         World::Plane([a, b, c, d], err) => {
@@ -100,6 +101,97 @@ fn clear_side(w: &World, ray: &Ray, lambda: f64) -> Option<bool> {
     }
 }
 
+/// Double-double arithmetic (a value as an unevaluated sum `hi + lo`), enough
+/// to evaluate `f(p + λr)` from a solid's local form with about 106 bits:
+/// sharp enough to see the kernel's own rounding far from the origin, where a
+/// world-space f64 evaluation cannot.
+mod dd {
+    #[derive(Clone, Copy, Debug)]
+    pub struct Dd(pub f64, pub f64);
+
+    fn two_sum(a: f64, b: f64) -> Dd {
+        let s = a + b;
+        let bb = s - a;
+        Dd(s, (a - (s - bb)) + (b - bb))
+    }
+
+    fn fast_two_sum(a: f64, b: f64) -> Dd {
+        let s = a + b;
+        Dd(s, b - (s - a))
+    }
+
+    pub fn two_prod(a: f64, b: f64) -> Dd {
+        let p = a * b;
+        Dd(p, a.mul_add(b, -p))
+    }
+
+    impl Dd {
+        pub fn from(x: f64) -> Dd {
+            Dd(x, 0.0)
+        }
+        pub fn add(self, o: Dd) -> Dd {
+            let s = two_sum(self.0, o.0);
+            let t = two_sum(self.1, o.1);
+            let s = fast_two_sum(s.0, s.1 + t.0);
+            fast_two_sum(s.0, s.1 + t.1)
+        }
+        pub fn mul(self, o: Dd) -> Dd {
+            let p = two_prod(self.0, o.0);
+            fast_two_sum(p.0, p.1 + (self.0 * o.1 + self.1 * o.0))
+        }
+        pub fn value(self) -> f64 {
+            self.0 + self.1
+        }
+    }
+}
+
+/// `f(p + λr)` in double-double from the solid's local form (the stored
+/// centre, `A`, `w`, `k`, taken as the exact definition of the solid), a
+/// bound on its error, and the sum of the magnitudes of its terms.
+fn exact_f(solid: &Solid, ray: &Ray, lambda: f64) -> (f64, f64, f64) {
+    use dd::{two_prod, Dd};
+    let (p, r) = (ray.origin(), ray.direction());
+    match solid {
+        Solid::Quadric(q) => {
+            let (c, a, w, k) = q.local_parts();
+            // d = p + λr - c, exactly up to double-double rounding.
+            let d: [Dd; 3] = core::array::from_fn(|i| two_prod(lambda, r[i]).add(Dd::from(p[i])).add(Dd::from(-c[i])));
+            let mut f = Dd::from(k);
+            let mut size = k.abs();
+            for i in 0..3 {
+                for j in 0..3 {
+                    let term = Dd::from(a[(i, j)]).mul(d[i]).mul(d[j]);
+                    size += term.value().abs();
+                    f = f.add(term);
+                }
+                let term = Dd::from(2.0 * w[i]).mul(d[i]);
+                size += term.value().abs();
+                f = f.add(term);
+            }
+            (f.value(), 64.0 * EPS * EPS * size + f64::MIN_POSITIVE, size)
+        }
+        Solid::HalfSpace(h) => {
+            let (n, o) = (h.normal_vector(), h.reference_point());
+            // The stored d, exactly: the value at the reference point is n·0 + d.
+            let mut f = Dd::from(h.value(&o));
+            let mut size = f.value().abs();
+            for i in 0..3 {
+                let di = two_prod(lambda, r[i]).add(Dd::from(p[i])).add(Dd::from(-o[i]));
+                let term = Dd::from(n[i]).mul(di);
+                size += term.value().abs();
+                f = f.add(term);
+            }
+            (f.value(), 64.0 * EPS * EPS * size + f64::MIN_POSITIVE, size)
+        }
+    }
+}
+
+/// The sign of the exact `f(p + λr)` when it is clear.
+fn exact_side(solid: &Solid, ray: &Ray, lambda: f64) -> Option<bool> {
+    let (f, bound, _) = exact_f(solid, ray, lambda);
+    (f.abs() > bound).then_some(f < 0.0)
+}
+
 /// Sample parameters: the given ones, the ends of `set` and points just
 /// either side of them, midpoints between ends, and beyond the last end.
 fn samples(set: &IntervalSet, extra: &[f64]) -> Vec<f64> {
@@ -107,8 +199,12 @@ fn samples(set: &IntervalSet, extra: &[f64]) -> Vec<f64> {
     out.push(0.0);
     let finite: Vec<f64> = set.iter().flat_map(|iv| [iv.enter.t, iv.exit.t]).filter(|t| t.is_finite()).collect();
     for (i, &t) in finite.iter().enumerate() {
-        let step = 1e-6 * t.abs().max(1.0);
-        out.extend([t, t - step, t + step, 2.0 * t + 1.0]);
+        // Steps from far inside the rounding bound (skipped as unclear) to well outside it.
+        out.extend([t, 2.0 * t + 1.0]);
+        for rel in [1e-12, 1e-10, 1e-8, 1e-6] {
+            let step = rel * t.abs().max(1.0);
+            out.extend([t - step, t + step]);
+        }
         if let Some(&next) = finite.get(i + 1) {
             out.push(0.5 * (t + next));
         }
@@ -245,6 +341,87 @@ fn reversal_mirrors(solid: Solid, ray: Ray, l: f64, extra: &[f64]) -> Result<(),
     Ok(())
 }
 
+/// Where to put a solid far away and where to look at it from:
+/// `(distance, direction, aim offset, ray origin)`.
+type FarRay = (f64, Vector3<f64>, Point3<f64>, Point3<f64>);
+
+fn far_ray() -> impl Strategy<Value = FarRay> {
+    (
+        (1.0f64..9.0).prop_map(|e| 10f64.powf(e)),
+        strategies::unit_vector(),
+        strategies::point(2.0),
+        strategies::point(2.0),
+    )
+}
+
+/// The solid moved `distance` along `towards`, and a ray from `origin` aimed
+/// at its new place (offset by `aim`).
+fn place_far(solid: &Solid, &(distance, towards, aim, origin): &FarRay) -> (Solid, Ray, f64) {
+    let centre = towards * distance;
+    let moved = solid.transformed(&Transform::translate(centre).expect("finite"));
+    let ray = Ray::new(origin, centre + aim.coords - origin.coords).expect("a direction");
+    (moved, ray, distance)
+}
+
+/// Ellipsoids (a positive definite quadratic part: every ray meets them in a
+/// bounded interval whose ends cluster when seen from afar) and half-spaces.
+fn bounded_or_plane() -> impl Strategy<Value = Solid> {
+    let ellipsoid =
+        (Just(quadric::Quadric::sphere()), strategies::transform()).prop_map(|(q, m)| Solid::from(q.transformed(&m)));
+    prop_oneof![3 => ellipsoid, 1 => strategies::half_space().prop_map(Solid::from)]
+}
+
+/// The exact sign of `f` (double-double) agrees with the set at points
+/// 64, 1024 and 10⁶ rounding units either side of every finite end, and at `extra`.
+///
+/// A unit is `ε·(λ + (|p| + |c|)·|∇f|/|f'| + size/|f'|)`: the kernel rounds λ
+/// itself, the ray origin relative to the centre (moving the root by that
+/// times `|∇f|/|f'|`, large for grazing rays), and `f` near the root (by
+/// `ε·size`, `size` the sum of the magnitudes of `f`'s terms). With
+/// `at_origin`, `size` is also taken at the ray origin: where the kernel does
+/// not re-base the ray (the roots do not cluster, e.g. a ray close to a cone's
+/// asymptote), `u = f(p)` is evaluated there and its rounding moves the root.
+fn exact_sign_near_ends(solid: &Solid, ray: &Ray, extra: &[f64], at_origin: bool) -> Result<(), TestCaseError> {
+    let set = solid.intervals(ray, 0);
+    let mut probes = extra.to_vec();
+    let position = ray.origin().coords.amax()
+        + match solid {
+            Solid::Quadric(q) => q.centre().coords.amax(),
+            Solid::HalfSpace(h) => h.reference_point().coords.amax(),
+        };
+    for t in set.iter().flat_map(|iv| [iv.enter.t, iv.exit.t]).filter(|t| t.is_finite()) {
+        let (_, _, mut size) = exact_f(solid, ray, t);
+        if at_origin {
+            size += exact_f(solid, ray, 0.0).2;
+        }
+        let h = 1e-6 * (t + 1.0);
+        let slope = ((exact_f(solid, ray, t + h).0 - exact_f(solid, ray, t - h).0) / (2.0 * h)).abs();
+        let grad = match solid {
+            Solid::Quadric(q) => q.gradient(&ray.at(t)).norm(),
+            Solid::HalfSpace(hs) => hs.normal_vector().norm(),
+        };
+        let unit = EPS * (t + (position * grad + size) / slope);
+        for k in [64.0, 1024.0, 1e6] {
+            probes.extend([t - k * unit, t + k * unit]);
+        }
+    }
+    for lambda in probes.into_iter().filter(|&l| l >= 0.0) {
+        if let Some(inside) = exact_side(solid, ray, lambda) {
+            prop_assert_eq!(
+                set.contains(lambda),
+                inside,
+                "λ = {}: exact f = {:?}, set {:?}, solid {:?}, ray {:?}",
+                lambda,
+                exact_f(solid, ray, lambda),
+                set,
+                solid,
+                ray
+            );
+        }
+    }
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { failure_persistence: None, ..ProptestConfig::default() })]
 
@@ -257,6 +434,31 @@ proptest! {
     #[test]
     fn grid_intervals_agree_with_the_sign_of_f(solid in strategies::grid_solid(), ray in strategies::grid_ray(3), extra in sample_params()) {
         agrees_with_the_sign_of_f(solid, ray, &extra)?;
+    }
+
+    /// Solids moved up to 10⁹ away and a ray from near the origin aimed at
+    /// them: the far-away path (local centre, ray re-based at the roots). The
+    /// world coefficients lose accuracy there, which the f64 oracle's bound
+    /// accounts for; the double-double oracle then checks the sign a few
+    /// rounding units either side of every end, where a unit allows for the
+    /// rounding of `f` at the ray origin as well (see `far_solid_ends_are_sharp`).
+    #[test]
+    fn far_intervals_agree_with_the_sign_of_f(solid in strategies::solid(), far in far_ray(), offsets in proptest::collection::vec(-8.0f64..8.0, 16)) {
+        let (moved, ray, distance) = place_far(&solid, &far);
+        let extra: Vec<f64> = offsets.iter().map(|o| distance + o).collect();
+        agrees_with_the_sign_of_f(moved, ray, &extra)?;
+        exact_sign_near_ends(&moved, &ray, &extra, true)?;
+    }
+
+    /// Ellipsoids and half-spaces far away: their ends are within a few
+    /// rounding units of the exact roots, counted at the end itself (the
+    /// kernel re-bases the ray there, so the distance from the origin must
+    /// not matter).
+    #[test]
+    fn far_solid_ends_are_sharp(solid in bounded_or_plane(), far in far_ray(), offsets in proptest::collection::vec(-8.0f64..8.0, 16)) {
+        let (moved, ray, distance) = place_far(&solid, &far);
+        let extra: Vec<f64> = offsets.iter().map(|o| distance + o).collect();
+        exact_sign_near_ends(&moved, &ray, &extra, false)?;
     }
 
     #[test]
@@ -372,4 +574,30 @@ fn complement_meets_exactly_when_t_is_zero() {
     let whole = IntervalSet::from_interval(Bound::free(0.0), Bound::free(INF));
     assert!(inside.union(&outside).expect("fits").same_points(&whole), "{inside:?} ∪ {outside:?}");
     assert!(inside.intersect(&outside).expect("fits").is_empty(), "{inside:?} ∩ {outside:?}");
+}
+
+/// A ray close to an asymptotic direction of a one-sheet hyperboloid about
+/// 1.6·10³ (and 1.6·10⁶) away: `s = rᵀAr` is nearly 0, so the two roots do not
+/// cluster and the kernel does not re-base the ray; `u = f(p)` is then formed
+/// at the ray origin from terms of size |p - c|² that cancel, and its rounding
+/// moves the near root by `ε·|p - c|²/|f'|`, about 180 units of `ε·λ` at
+/// 1.6·10³ and growing with the distance. Re-basing at (or refining from)
+/// the computed near root, not only at the midpoint of clustered roots,
+/// would keep it at the floor.
+#[test]
+#[ignore = "accuracy limit in Quadric::intervals (q2's quadric.rs): rays near a cone's or hyperboloid's asymptote are not re-based, so far away their near root is off by ε·|p-c|²/|f'|"]
+fn asymptotic_ray_far_away() {
+    for scale in [1.0, 1e3] {
+        let centre = Vector3::new(-810.0963274500517, -1155.3656515368925, 824.8410024824279) * scale;
+        let sheet =
+            quadric::Quadric::hyperboloid_one_sheet().transformed(&Transform::translate(centre).expect("finite"));
+        let ray = Ray::new(
+            Point3::new(0.9678603143235994, 0.0, 0.0),
+            Vector3::new(-0.49588608855295685, -0.7072932755817254, 0.5038186275799282),
+        )
+        .expect("a direction");
+        if let Err(e) = exact_sign_near_ends(&Solid::from(sheet), &ray, &[], false) {
+            panic!("at scale {scale}: {e}");
+        }
+    }
 }
