@@ -4,7 +4,13 @@
 //! directly from the world-space coefficients (a different formula from the
 //! kernel's `s, t, u` and roots), only at `λ` where `|f|` exceeds a rounding
 //! bound computed alongside, so that no assertion depends on how a boundary
-//! point rounds.
+//! point rounds. Far from the origin, where f64 world coefficients are too
+//! coarse, `f` is evaluated in double-double from the solid's local form
+//! instead, sharp enough to see the kernel's own rounding.
+//!
+//! Each property runs on random solids and rays ([`strategies::solid`],
+//! [`strategies::ray`]) and on exact grid ones ([`strategies::grid_solid`],
+//! [`strategies::grid_ray`]: tangents, rays in the surface, `s = 0`, `t = 0`).
 //!
 //! Case counts come from `PROPTEST_CASES` (1000 in CI) through `ProptestConfig::default()`.
 
