@@ -488,6 +488,27 @@ proptest! {
     }
 
 
+    /// Sets of two solids along one ray combine like their points: the
+    /// intersection and union agree with both signs of `f` wherever both are
+    /// clear, and the half-space fast path (`interval` + `intersect_interval`)
+    /// gives the same set as the general one.
+    #[test]
+    fn two_solids_combine(a in strategies::solid(), b in strategies::solid(), h in strategies::half_space(), ray in strategies::ray(6.0), extra in sample_params()) {
+        let (sa, sb) = (a.intervals(&ray, 0), b.intervals(&ray, 1));
+        let (and, or) = (sa.intersect(&sb).expect("fits"), sa.union(&sb).expect("fits"));
+        let (wa, wb) = (world(&a), world(&b));
+        let mut probes = samples(&sa, &extra);
+        probes.extend(samples(&sb, &[]));
+        for lambda in probes {
+            if let (Some(ia), Some(ib)) = (clear_side(&wa, &ray, lambda), clear_side(&wb, &ray, lambda)) {
+                prop_assert_eq!(and.contains(lambda), ia && ib, "λ = {}: {:?} ∩ {:?} = {:?}", lambda, sa, sb, and);
+                prop_assert_eq!(or.contains(lambda), ia || ib, "λ = {}: {:?} ∪ {:?} = {:?}", lambda, sa, sb, or);
+            }
+        }
+        let (enter, exit) = h.interval(&ray, 2);
+        prop_assert_eq!(sa.intersect_interval(enter, exit), sa.intersect(&h.intervals(&ray, 2)).expect("fits"));
+    }
+
     /// Applying a transform and then its inverse gives the point back.
     #[test]
     fn transform_round_trip(m in strategies::transform(), p in strategies::point(10.0)) {
