@@ -131,8 +131,9 @@ fn s_negative() {
     // Origin inside the ball, looking out: the exit of the ball at λ = 1.
     check(outside, ray([0.0, 0.0, 0.0], X), &[(1.0, INF)]);
 
-    let cone = Quadric::cone(); // x² - y² + z² <= 0
-                                // Through both nappes at x = 1: 1 - y² <= 0, |y| >= 1, y = λ - 5.
+    // The solid: x² - y² + z² <= 0.
+    let cone = Quadric::cone();
+    // Through both nappes at x = 1: 1 - y² <= 0, |y| >= 1, y = λ - 5.
     check(cone, ray([1.0, -5.0, 0.0], Y), &[(0.0, 4.0), (6.0, INF)]);
     // Along the axis: f = -y², D = t² - su = 25 - 25 = 0; the pieces touch at the apex.
     check(cone, ray([0.0, -5.0, 0.0], Y), &[(0.0, INF)]);
@@ -140,11 +141,12 @@ fn s_negative() {
     check(cone, ray([-5.0, 2.0, 0.0], X), &[(3.0, 7.0)]);
     // Across at y = 0: x² <= 0 only at the apex, a touching point.
     check(cone, ray([-5.0, 0.0, 0.0], X), &[]);
-    // Along a generator (x = y) from the apex's far side: f ≡ 0 … the ray lies in the surface.
+    // Along a generator (x = y, z = 0) through the apex: f ≡ 0, the ray lies in the surface (u <= 0).
     check(cone, ray([-2.0, -2.0, 0.0], [1.0, 1.0, 0.0]), &[(0.0, INF)]);
 
-    let sheet = Quadric::hyperboloid_one_sheet(); // x² - y² + z² - 1 <= 0
-                                                  // Along y at x = 2: 3 - y² <= 0, |y| >= √3.
+    // The solid: x² - y² + z² - 1 <= 0.
+    let sheet = Quadric::hyperboloid_one_sheet();
+    // Along y at x = 2: 3 - y² <= 0, |y| >= √3.
     let r3 = 3f64.sqrt();
     check(sheet, ray([2.0, -5.0, 0.0], Y), &[(0.0, 5.0 - r3), (5.0 + r3, INF)]);
     // Across the waist: x² <= 1.
@@ -156,20 +158,22 @@ fn s_negative() {
 
 #[test]
 fn s_zero() {
-    let bowl = Quadric::paraboloid(); // x² + z² - y <= 0
-                                      // s = 0, t != 0 along the axis: f = -y, y = λ - 5 >= 0.
+    // The solid: x² + z² - y <= 0.
+    let bowl = Quadric::paraboloid();
+    // s = 0, t != 0 along the axis: f = -y, y = λ - 5 >= 0.
     check(bowl, ray([0.0, -5.0, 0.0], Y), &[(5.0, INF)]);
     // The other way: y = 5 - λ >= 0.
     check(bowl, ray([0.0, 5.0, 0.0], NEG_Y), &[(0.0, 5.0)]);
     // Off the axis at x = 1: 1 - y <= 0, y >= 1.
     check(bowl, ray([1.0, -5.0, 0.0], Y), &[(6.0, INF)]);
-    // Going away from the bowl, outside: -y > 0 ahead... y = -5 - λ < 0.
+    // Going away from the bowl, outside: y = -5 - λ < 0, so f = -y > 0 all along.
     check(bowl, ray([0.0, -5.0, 0.0], NEG_Y), &[]);
     // Across at y = 4: x² <= 4.
     check(bowl, ray([-5.0, 4.0, 0.0], X), &[(3.0, 7.0)]);
 
-    let tube = Quadric::tube_y(); // x² + z² - 1 <= 0
-                                  // s = 0, t = 0, u <= 0: along the axis inside: everything.
+    // The solid: x² + z² - 1 <= 0.
+    let tube = Quadric::tube_y();
+    // s = 0, t = 0, u <= 0: along the axis inside: everything.
     check(tube, ray([0.0, 0.0, 0.0], Y), &[(0.0, INF)]);
     check(tube, ray([0.5, 3.0, -0.5], NEG_Y), &[(0.0, INF)]);
     // s = 0, t = 0, u > 0: parallel outside: empty.
@@ -250,8 +254,9 @@ fn complements() {
 
 #[test]
 fn half_spaces() {
-    let below = half(0.0, 1.0, 0.0, -1.0); // y <= 1
-                                           // Parallel inside / outside / in the plane (t = 0: u <= 0 decides).
+    // The solid: y <= 1.
+    let below = half(0.0, 1.0, 0.0, -1.0);
+    // Parallel inside / outside / in the plane (t = 0: u <= 0 decides).
     check(below, ray([0.0, 0.0, 0.0], X), &[(0.0, INF)]);
     check(below, ray([0.0, 2.0, 0.0], X), &[]);
     check(below, ray([0.0, 1.0, 0.0], Z), &[(0.0, INF)]);
