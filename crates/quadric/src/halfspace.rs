@@ -110,7 +110,8 @@ impl HalfSpace {
         if t == 0.0 || !t.is_finite() {
             return if u <= 0.0 { all } else { none };
         }
-        let root = -u / t;
+        // `+ 0.0` turns a root of -0.0 (u = -0.0 on the plane) into +0.0.
+        let root = -u / t + 0.0;
         if !root.is_finite() {
             return if u <= 0.0 { all } else { none };
         }

@@ -131,11 +131,19 @@ impl IntervalSet {
     }
 
     /// Builds a set from intervals in any order; overlapping or touching ones
-    /// are merged, empty or NaN ones dropped.
+    /// are merged, empty or NaN ones dropped. Fails only if the merged result
+    /// has more than [`Self::CAPACITY`] intervals.
+    ///
+    /// Not for the ray path: it sorts in a heap buffer, since merging in input
+    /// order could overflow the capacity on the way to a result that fits.
+    /// Where two intervals start together, the one listed first gives the entry.
     pub fn from_intervals<I: IntoIterator<Item = Interval>>(items: I) -> Result<Self, CapacityError> {
+        let mut sorted: Vec<Interval> = items.into_iter().filter(|iv| iv.enter.t < iv.exit.t).collect();
+        // Stable: ties keep the input order.
+        sorted.sort_by(|x, y| x.enter.t.total_cmp(&y.enter.t));
         let mut acc = Self::empty();
-        for iv in items {
-            acc = acc.union(&Self::from_interval(iv.enter, iv.exit))?;
+        for iv in sorted {
+            acc.push(iv, false)?;
         }
         Ok(acc)
     }
@@ -180,17 +188,18 @@ impl IntervalSet {
         self.iter().find(|iv| iv.contains(t))
     }
 
-    /// Appends an interval that starts after every interval already present,
-    /// merging it with the last one if they touch. Empty intervals are ignored.
+    /// Appends an interval that starts no earlier than every interval already
+    /// present, merging it with the last one if they touch. Empty intervals
+    /// are ignored. If both end together, the new end is kept when `wins_ties`.
     #[inline]
-    fn push(&mut self, iv: Interval) -> Result<(), CapacityError> {
-        // `!(a < b)` also rejects NaN.
-        if !(iv.enter.t < iv.exit.t) {
+    fn push(&mut self, iv: Interval, wins_ties: bool) -> Result<(), CapacityError> {
+        // Empty, inverted or NaN intervals are dropped.
+        if iv.enter.t.partial_cmp(&iv.exit.t) != Some(core::cmp::Ordering::Less) {
             return Ok(());
         }
         if let Some(last) = self.items[..self.len as usize].last_mut() {
             if iv.enter.t <= last.exit.t {
-                if iv.exit.t > last.exit.t {
+                if iv.exit.t > last.exit.t || (wins_ties && iv.exit.t == last.exit.t) {
                     last.exit = iv.exit;
                 }
                 return Ok(());
@@ -213,7 +222,7 @@ impl IntervalSet {
             let (x, y) = (a[i], b[j]);
             let enter = if y.enter.t > x.enter.t { y.enter } else { x.enter };
             let exit = if y.exit.t < x.exit.t { y.exit } else { x.exit };
-            out.push(Interval::new(enter, exit))?;
+            out.push(Interval::new(enter, exit), false)?;
             if x.exit.t <= y.exit.t {
                 i += 1;
             } else {
@@ -252,7 +261,8 @@ impl IntervalSet {
                 j += 1;
                 b[j - 1]
             };
-            out.push(next)?;
+            // On coincident ends the end of `self` wins.
+            out.push(next, take_a)?;
         }
         Ok(out)
     }
@@ -263,10 +273,12 @@ impl IntervalSet {
         let mut out = Self::empty();
         let mut start = Bound::free(lo);
         for iv in self.iter() {
-            out.push(Interval::new(start, Bound::new(iv.enter.t.min(hi), iv.enter.solid)))?;
+            // A gap cut off at `hi` ends at no surface.
+            let end = if iv.enter.t <= hi { iv.enter } else { Bound::free(hi) };
+            out.push(Interval::new(start, end), false)?;
             start = if iv.exit.t > lo { iv.exit } else { Bound::free(lo) };
         }
-        out.push(Interval::new(start, Bound::free(hi)))?;
+        out.push(Interval::new(start, Bound::free(hi)), false)?;
         Ok(out)
     }
 
@@ -276,8 +288,15 @@ impl IntervalSet {
     }
 
     /// The part of the set inside `[lo, hi]`; clipped ends carry no solid.
+    /// An end at `-0.0` comes out as `+0.0`, so a ray's sets never show `-0`.
     pub fn clip(&self, lo: f64, hi: f64) -> Self {
-        self.intersect_interval(Bound::free(lo), Bound::free(hi))
+        let mut out = self.intersect_interval(Bound::free(lo), Bound::free(hi));
+        for iv in &mut out.items[..out.len as usize] {
+            // `x + 0.0` is `x` except that it maps -0.0 to +0.0.
+            iv.enter.t += 0.0;
+            iv.exit.t += 0.0;
+        }
+        out
     }
 
     /// Keeps only the intervals for which `keep` is true.

@@ -63,7 +63,28 @@ impl Ray {
     }
 
     /// The same line traversed the other way, starting at `at(lambda)`.
+    ///
+    /// `lambda` must be finite and small enough for `at(lambda)` to be
+    /// finite; [`try_reversed_at`](Self::try_reversed_at) checks that.
     pub fn reversed_at(&self, lambda: f64) -> Ray {
         Ray { origin: self.at(lambda), direction: -self.direction }
+    }
+
+    /// [`reversed_at`](Self::reversed_at), checked: an error if the new
+    /// origin `at(lambda)` is not finite.
+    ///
+    /// ```
+    /// use nalgebra::{Point3, Vector3};
+    /// use quadric::Ray;
+    /// let ray = Ray::new(Point3::origin(), Vector3::x()).unwrap();
+    /// assert_eq!(ray.try_reversed_at(2.0).unwrap().origin(), Point3::new(2.0, 0.0, 0.0));
+    /// assert!(ray.try_reversed_at(f64::INFINITY).is_err());
+    /// ```
+    pub fn try_reversed_at(&self, lambda: f64) -> Result<Ray, GeometryError> {
+        let origin = self.at(lambda);
+        if !origin.iter().all(|c| c.is_finite()) {
+            return Err(GeometryError::NonFinite { what: "the reversed ray's origin" });
+        }
+        Ok(Ray { origin, direction: -self.direction })
     }
 }

@@ -37,6 +37,81 @@ pub fn ray(extent: f64) -> impl Strategy<Value = Ray> + Clone {
     (point(extent), unit_vector()).prop_filter_map("degenerate direction", |(p, d)| Ray::new(p, d).ok())
 }
 
+/// A direction that is often axis-aligned or diagonal, with exact zero
+/// components of either sign (the `s = 0`, `t = 0` rows of the table and
+/// `-0.0` handling), otherwise uniform. Not normalised.
+pub fn direction() -> impl Strategy<Value = Vector3<f64>> + Clone {
+    let zero = prop_oneof![Just(0.0f64), Just(-0.0f64)];
+    let small = prop_oneof![3 => (-2i32..=2).prop_map(f64::from), 1 => zero.clone()];
+    prop_oneof![
+        unit_vector(),
+        (0usize..3, any::<bool>(), zero.clone(), zero).prop_map(|(axis, neg, z1, z2)| {
+            let mut v = Vector3::new(z1, z2, z1);
+            v[axis] = if neg { -1.0 } else { 1.0 };
+            v
+        }),
+        (small.clone(), small.clone(), small)
+            .prop_filter("non-zero", |(x, y, z)| *x != 0.0 || *y != 0.0 || *z != 0.0)
+            .prop_map(|(x, y, z)| Vector3::new(x, y, z)),
+    ]
+}
+
+/// A ray with its origin on the grid of halves in `[-extent, extent]³` and a
+/// [`direction`]: rays through centres, along axes, tangent to unit surfaces
+/// and lying in them come up often.
+pub fn grid_ray(extent: i32) -> impl Strategy<Value = Ray> + Clone {
+    let c = (-2 * extent..=2 * extent).prop_map(|i| f64::from(i) / 2.0);
+    (c.clone(), c.clone(), c, direction())
+        .prop_filter_map("degenerate direction", |(x, y, z, d)| Ray::new(Point3::new(x, y, z), d).ok())
+}
+
+/// An exactly representable placement: integer translations, scales by
+/// ±2^k (k in -2..=2) per axis, and quarter-turn rotations, so that the
+/// moved coefficients are exact and degenerate cases stay degenerate.
+pub fn grid_transform() -> impl Strategy<Value = Transform> + Clone {
+    let factor = (-2i32..=2, any::<bool>()).prop_map(|(k, neg)| if neg { -(2f64.powi(k)) } else { 2f64.powi(k) });
+    let step = prop_oneof![
+        (-3i32..=3, -3i32..=3, -3i32..=3).prop_filter_map("finite", |(x, y, z)| {
+            Transform::translate(Vector3::new(f64::from(x), f64::from(y), f64::from(z))).ok()
+        }),
+        (factor.clone(), factor.clone(), factor)
+            .prop_filter_map("finite", |(x, y, z)| Transform::scale_xyz(Vector3::new(x, y, z)).ok()),
+        (0usize..3, 0i32..4).prop_filter_map("finite", |(axis, k)| {
+            let deg = f64::from(90 * k);
+            match axis {
+                0 => Transform::rotate_x_degrees(deg).ok(),
+                1 => Transform::rotate_y_degrees(deg).ok(),
+                _ => Transform::rotate_z_degrees(deg).ok(),
+            }
+        }),
+    ];
+    proptest::collection::vec(step, 0..4).prop_map(|steps| steps.iter().fold(Transform::identity(), |m, s| m.then(s)))
+}
+
+/// An elementary quadric, or a half-space with an axis normal, under a
+/// [`grid_transform`], possibly complemented: exact coefficients, so
+/// tangent rays and rays in the surface are exactly that.
+pub fn grid_solid() -> impl Strategy<Value = Solid> + Clone {
+    let plane = (0usize..3, any::<bool>(), -2i32..=2).prop_filter_map("valid", |(axis, neg, d)| {
+        let mut n = Vector3::zeros();
+        n[axis] = if neg { -1.0 } else { 1.0 };
+        HalfSpace::new(n.x, n.y, n.z, f64::from(d)).ok()
+    });
+    (
+        prop_oneof![3 => elementary_quadric().prop_map(Solid::from), 1 => plane.prop_map(Solid::from)],
+        grid_transform(),
+        any::<bool>(),
+    )
+        .prop_map(|(q, m, c)| {
+            let q = q.transformed(&m);
+            if c {
+                q.complement()
+            } else {
+                q
+            }
+        })
+}
+
 /// One elementary step: translation, per-axis scale (factors of magnitude
 /// 0.25 … 4, either sign), or a rotation about x, y or z.
 pub fn elementary_transform() -> impl Strategy<Value = Transform> + Clone {
@@ -56,7 +131,7 @@ pub fn elementary_transform() -> impl Strategy<Value = Transform> + Clone {
 
 /// A composition of up to four elementary steps.
 pub fn transform() -> impl Strategy<Value = Transform> + Clone {
-    proptest::collection::vec(elementary_transform(), 0..4)
+    proptest::collection::vec(elementary_transform(), 0..=4)
         .prop_map(|steps| steps.iter().fold(Transform::identity(), |m, s| m.then(s)))
 }
 

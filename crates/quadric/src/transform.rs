@@ -142,7 +142,7 @@ impl Transform {
         }
         let residual =
             (linear * inverse - Matrix3::identity()).amax().max((inverse * linear - Matrix3::identity()).amax());
-        if !(residual <= 1e-9) {
+        if residual.is_nan() || residual > 1e-9 {
             return Err(GeometryError::Singular { reason: "the matrix is too close to singular" });
         }
         Ok(Transform { linear, inverse, translation })
@@ -156,6 +156,39 @@ impl Transform {
             inverse: self.inverse * other.inverse,
             translation: other.linear * self.translation + other.translation,
         }
+    }
+
+    /// [`then`](Self::then), checked: an error if the composition is not a
+    /// usable invertible transform, i.e. if the linear part or the translation
+    /// overflows ([`GeometryError::NonFinite`]), or if the inverse overflows or
+    /// the product of the part and its inverse is no longer the identity to
+    /// within `1e-3` (underflow to a singular matrix, or a condition number
+    /// beyond about `10¹²`: [`GeometryError::Singular`]).
+    ///
+    /// ```
+    /// use quadric::{GeometryError, Transform};
+    /// let big = Transform::scale(1e200).unwrap();
+    /// assert!(big.checked_then(&Transform::scale(1e-100).unwrap()).is_ok());
+    /// assert!(matches!(big.checked_then(&big), Err(GeometryError::NonFinite { .. })));
+    /// ```
+    pub fn checked_then(&self, other: &Transform) -> Result<Transform, GeometryError> {
+        let m = self.then(other);
+        if !m.linear.iter().all(|c| c.is_finite()) {
+            return Err(GeometryError::NonFinite { what: "the composed transform's linear part" });
+        }
+        if !m.inverse.iter().all(|c| c.is_finite()) {
+            return Err(GeometryError::Singular { reason: "the composed transform's inverse overflows" });
+        }
+        if !m.translation.iter().all(|c| c.is_finite()) {
+            return Err(GeometryError::NonFinite { what: "the composed transform's translation" });
+        }
+        // Both parts are exact compositions of exact inverses, so the residual
+        // is about κ·ε unless an entry underflowed.
+        let residual = (m.linear * m.inverse - Matrix3::identity()).amax();
+        if residual.is_nan() || residual > 1e-3 {
+            return Err(GeometryError::Singular { reason: "the composed transform is numerically singular" });
+        }
+        Ok(m)
     }
 
     /// The inverse map.

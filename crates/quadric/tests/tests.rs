@@ -1,3 +1,7 @@
 //! The quadric crate's integration tests, one binary; each topic lives in its own file.
 
 mod accuracy;
+mod bad_input;
+mod laws;
+mod oracle;
+mod table;
