@@ -494,7 +494,6 @@ fn pieces_per_solid() {
 /// Either the classification must be exact, or the kernel must treat `s` of
 /// a quadric it calls convex as `max(s, 0)` so the two agree by construction.
 #[test]
-#[ignore = "bug between Quadric::is_convex's tolerance and Quadric::intervals (q2's quadric.rs): a quadric called convex can give two intervals"]
 fn max_intervals_bounds_the_pieces() {
     let waisted = coefficients([1.0, -1e-13, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0]);
     let solid = Solid::from(waisted);
