@@ -1,6 +1,6 @@
 //! Blocks: intersections of solids.
 
-use quadric::{IntervalSet, Ray, Solid};
+use quadric::{Bound, Interval, IntervalSet, Ray, Solid};
 
 use crate::ComplexError;
 
@@ -54,6 +54,41 @@ pub struct Block {
     solids: Vec<Solid>,
     opacity: Opacity,
     material: MaterialKey,
+    /// Every solid is convex, so a ray meets the block in at most one
+    /// interval: [`Block::spans`] then keeps two bounds instead of sets.
+    convex: bool,
+}
+
+/// A block's intervals along a ray: without an interval set (and the copies
+/// of its fixed-size buffer) when there is at most one.
+// Boxing the set would allocate per ray; the big variant is the rare one.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Spans {
+    Empty,
+    One(Interval),
+    Many(IntervalSet),
+}
+
+impl Spans {
+    /// The intervals, sorted.
+    #[inline]
+    pub(crate) fn as_slice(&self) -> &[Interval] {
+        match self {
+            Spans::Empty => &[],
+            Spans::One(iv) => core::slice::from_ref(iv),
+            Spans::Many(set) => set.as_slice(),
+        }
+    }
+
+    #[inline]
+    fn into_set(self) -> IntervalSet {
+        match self {
+            Spans::Empty => IntervalSet::empty(),
+            Spans::One(iv) => IntervalSet::from_interval(iv.enter, iv.exit),
+            Spans::Many(set) => set,
+        }
+    }
 }
 
 impl Block {
@@ -82,7 +117,7 @@ impl Block {
         if non_convex >= IntervalSet::CAPACITY {
             return Err(ComplexError::TooManyNonConvex { name, count: non_convex, max: IntervalSet::CAPACITY - 1 });
         }
-        Ok(Block { name, solids, opacity, material })
+        Ok(Block { name, solids, opacity, material, convex: non_convex == 0 })
     }
 
     /// The block's name.
@@ -119,6 +154,45 @@ impl Block {
     /// sets, each end tagged with the index of the solid it lies on. Stops as
     /// soon as the running set is empty (seed 001's loop).
     pub fn intervals(&self, ray: &Ray) -> IntervalSet {
+        self.spans(ray).into_set()
+    }
+
+    /// [`Block::intervals`] without building a set for a convex block: the
+    /// same bounds, found by the same comparisons in the same order (on equal
+    /// `t` the earlier solid's end is kept, as `IntervalSet::intersect` does).
+    #[inline]
+    pub(crate) fn spans(&self, ray: &Ray) -> Spans {
+        if !self.convex {
+            return self.spans_general(ray);
+        }
+        let (mut enter, mut exit) = (Bound::free(0.0), Bound::free(f64::INFINITY));
+        for (i, s) in self.solids.iter().enumerate() {
+            let (e, x) = match s {
+                Solid::HalfSpace(h) => h.interval(ray, i as u32),
+                Solid::Quadric(q) => match *q.intervals(ray, i as u32).as_slice() {
+                    [] => return Spans::Empty,
+                    [iv] => (iv.enter, iv.exit),
+                    // A convex quadric gives at most one interval; should
+                    // rounding ever give two, the general path is exact.
+                    _ => return self.spans_general(ray),
+                },
+            };
+            if e.t > enter.t {
+                enter = e;
+            }
+            if x.t < exit.t {
+                exit = x;
+            }
+            // Not less (equal, greater or NaN): empty, like `IntervalSet`.
+            if enter.t.partial_cmp(&exit.t) != Some(core::cmp::Ordering::Less) {
+                return Spans::Empty;
+            }
+        }
+        Spans::One(Interval::new(enter, exit))
+    }
+
+    /// Intersection of interval sets, for blocks with non-convex solids.
+    fn spans_general(&self, ray: &Ray) -> Spans {
         let mut acc = IntervalSet::everything().clip(0.0, f64::INFINITY);
         for (i, s) in self.solids.iter().enumerate() {
             let i = i as u32;
@@ -137,6 +211,6 @@ impl Block {
                 break;
             }
         }
-        acc
+        Spans::Many(acc)
     }
 }

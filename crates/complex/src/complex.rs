@@ -293,7 +293,7 @@ impl Complex {
         let mut consider = |i: u32| {
             let b = &self.blocks[i as usize];
             let best = if b.is_transparent() { &mut transparent } else { &mut opaque };
-            if i < *best && b.intervals(ray).iter().any(|iv| iv.enter.t <= t && t < iv.exit.t) {
+            if i < *best && b.spans(ray).as_slice().iter().any(|iv| iv.enter.t <= t && t < iv.exit.t) {
                 *best = i;
             }
         };
@@ -309,7 +309,7 @@ impl Complex {
     fn next_end(&self, ray: &Ray, rb: &RayBoxes, tau: f64, max_t: f64) -> Option<f64> {
         let mut best: Option<f64> = None;
         let mut consider = |i: u32, t_max: &mut f64| {
-            for iv in self.blocks[i as usize].intervals(ray).iter() {
+            for iv in self.blocks[i as usize].spans(ray).as_slice().iter() {
                 for e in [iv.enter.t, iv.exit.t] {
                     if e > tau && e <= *t_max && e.is_finite() && best.map_or(true, |b| e < b) {
                         best = Some(e);
@@ -342,14 +342,14 @@ impl Complex {
     /// starts there, else the exit of the old one (as in the partition).
     fn event_hit(&self, ray: &Ray, t: f64, before: Option<BlockId>, after: Option<BlockId>) -> Option<Hit> {
         let entry = after.and_then(|id| {
-            let set = self.blocks[id.index()].intervals(ray);
-            let solid = set.iter().find(|iv| iv.enter.t == t)?.enter.solid()?;
+            let set = self.blocks[id.index()].spans(ray);
+            let solid = set.as_slice().iter().find(|iv| iv.enter.t == t)?.enter.solid()?;
             Some(self.hit(ray, t, id.0, solid, true))
         });
         entry.or_else(|| {
             let id = before?;
-            let set = self.blocks[id.index()].intervals(ray);
-            let solid = set.iter().find(|iv| iv.exit.t == t)?.exit.solid()?;
+            let set = self.blocks[id.index()].spans(ray);
+            let solid = set.as_slice().iter().find(|iv| iv.exit.t == t)?.exit.solid()?;
             Some(self.hit(ray, t, id.0, solid, false))
         })
     }
@@ -362,7 +362,7 @@ impl Complex {
         // of the run of overlapping intervals it is in.
         let mut run_end = eps;
         let mut probe = |i: u32| {
-            for iv in self.blocks[i as usize].intervals(ray).iter() {
+            for iv in self.blocks[i as usize].spans(ray).as_slice().iter() {
                 if iv.enter.t <= eps && eps < iv.exit.t {
                     run_end = run_end.max(iv.exit.t);
                 }
@@ -380,8 +380,8 @@ impl Complex {
         // owner after the event).
         let mut best: Option<(f64, u32, u32)> = None;
         let mut consider = |i: u32, t_max: &mut f64| {
-            let set = self.blocks[i as usize].intervals(ray);
-            if let Some(iv) = set.iter().find(|iv| iv.enter.t > eps) {
+            let set = self.blocks[i as usize].spans(ray);
+            if let Some(iv) = set.as_slice().iter().find(|iv| iv.enter.t > eps) {
                 let t = iv.enter.t;
                 if t <= *t_max && best.map_or(true, |(bt, bi, _)| t < bt || (t == bt && i < bi)) {
                     best = Some((t, i, iv.enter.solid));
@@ -406,7 +406,7 @@ impl Complex {
             // owner just before the exit.
             let mut owner: Option<(u32, u32)> = None;
             let mut extend = |i: u32| {
-                for iv in self.blocks[i as usize].intervals(ray).iter() {
+                for iv in self.blocks[i as usize].spans(ray).as_slice().iter() {
                     if iv.enter.t <= run_end && iv.exit.t >= next {
                         if iv.exit.t > next {
                             next = iv.exit.t;
