@@ -73,3 +73,22 @@ pub fn blocks_and_rays(n: usize, transparent: bool, rays: usize) -> (Vec<Block>,
         .collect();
     (blocks, rays)
 }
+
+/// Primary rays of a `w`×`w` pinhole camera in scanline order (coherent, as
+/// a renderer casts them) for the scene of `n` blocks: from the middle of
+/// the cube's front face, one side back, looking along `+z`, the cube's
+/// front face filling the view.
+pub fn camera_rays(n: usize, w: usize) -> Vec<Ray> {
+    let side = 2.0 * (n as f64).cbrt();
+    let eye = Point3::new(0.5 * side, 0.5 * side, -side);
+    let mut rays = Vec::with_capacity(w * w);
+    for j in 0..w {
+        for i in 0..w {
+            // The front face spans [-side/2, side/2] around the eye's axis at distance `side`.
+            let x = ((i as f64 + 0.5) / w as f64 - 0.5) * side;
+            let y = ((j as f64 + 0.5) / w as f64 - 0.5) * side;
+            rays.push(Ray::new(eye, Vector3::new(x, y, side)).expect("valid"));
+        }
+    }
+    rays
+}

@@ -1,7 +1,10 @@
 //! The random-blocks benchmark scene as a program, for profilers and for
-//! timing the build: `cargo run --release -p complex --example random_blocks -- N [RAYS] [--transparent]`
+//! timing the build: `cargo run --release -p complex --example random_blocks -- N [RAYS] [--transparent] [--camera]`
 //! prints the time to build the complex of `N` blocks (boxes and BVH), the
-//! time to cast `RAYS` rays (default 100,000) and the number of hits.
+//! time to cast `RAYS` rays (default 100,000) and the number of hits. The
+//! rays are random (incoherent: each one touches other parts of the
+//! hierarchy), or with `--camera` the primary rays of a square image of
+//! about `RAYS` pixels in scanline order (coherent).
 //!
 //! Under callgrind, count only the rays:
 //! `valgrind --tool=callgrind --toggle-collect='*cast_rays*' target/release/examples/random_blocks 100000`.
@@ -18,10 +21,14 @@ mod random_scene;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let transparent = args.iter().any(|a| a == "--transparent");
+    let camera = args.iter().any(|a| a == "--camera");
     let mut numbers = args.iter().filter(|a| !a.starts_with("--")).map(|a| a.parse::<usize>());
     let n = numbers.next().transpose()?.unwrap_or(100_000);
     let count = numbers.next().transpose()?.unwrap_or(100_000);
-    let (blocks, rays) = random_scene::blocks_and_rays(n, transparent, count);
+    let (blocks, mut rays) = random_scene::blocks_and_rays(n, transparent, count);
+    if camera {
+        rays = random_scene::camera_rays(n, (count as f64).sqrt().round() as usize);
+    }
     let start = Instant::now();
     let complex = Complex::new(blocks, ComplexOptions::default())?;
     let build = start.elapsed();

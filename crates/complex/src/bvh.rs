@@ -85,22 +85,20 @@ impl RayBoxes {
     /// `[t_min, t_max]`, or `None`. Conservative: rounding in the slab test
     /// is covered by a few ulps of slack, so a point of the box on the ray is
     /// never missed.
+    ///
+    /// No branch for a ray parallel to a slab: its reciprocal is `±∞`, so the
+    /// slab gives `[-∞, ∞]` from inside, `±[∞, ∞]` (a miss) from outside, and
+    /// NaN (`0·∞`) from its boundary plane, which fails both comparisons and
+    /// leaves the range open (the closed box holds that point).
     #[inline(always)]
     pub(crate) fn enter(&self, min: &[f64; 3], max: &[f64; 3], t_min: f64, t_max: f64) -> Option<f64> {
         let (mut t0, mut t1) = (t_min, t_max);
         for i in 0..3 {
             let inv = self.inv[i];
-            if inv.is_infinite() {
-                // Parallel to the slab: inside it or never.
-                if self.origin[i] < min[i] || self.origin[i] > max[i] {
-                    return None;
-                }
-                continue;
-            }
             let a = (min[i] - self.origin[i]) * inv;
             let b = (max[i] - self.origin[i]) * inv;
-            let (a, b) = if a <= b { (a, b) } else { (b, a) };
-            // NaN (∞ - ∞ on an infinite side) fails both tests and leaves the range open.
+            let (a, b) = if inv >= 0.0 { (a, b) } else { (b, a) };
+            // NaN (∞ - ∞ on an infinite side, 0·∞) fails both tests and leaves the range open.
             if a > t0 {
                 t0 = a;
             }
