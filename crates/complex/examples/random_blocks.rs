@@ -4,7 +4,9 @@
 //! time to cast `RAYS` rays (default 100,000) and the number of hits. The
 //! rays are random (incoherent: each one touches other parts of the
 //! hierarchy), or with `--camera` the primary rays of a square image of
-//! about `RAYS` pixels in scanline order (coherent).
+//! about `RAYS` pixels in scanline order (coherent), or with `--bench` the
+//! bench's 1,024 random rays over and over (as `cargo bench` casts them:
+//! after the first round, what they touch is in the caches).
 //!
 //! Under callgrind, count only the rays:
 //! `valgrind --tool=callgrind --toggle-collect='*cast_rays*' target/release/examples/random_blocks 100000`.
@@ -22,12 +24,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let transparent = args.iter().any(|a| a == "--transparent");
     let camera = args.iter().any(|a| a == "--camera");
+    let bench = args.iter().any(|a| a == "--bench");
     let mut numbers = args.iter().filter(|a| !a.starts_with("--")).map(|a| a.parse::<usize>());
     let n = numbers.next().transpose()?.unwrap_or(100_000);
     let count = numbers.next().transpose()?.unwrap_or(100_000);
     let (blocks, mut rays) = random_scene::blocks_and_rays(n, transparent, count);
     if camera {
         rays = random_scene::camera_rays(n, (count as f64).sqrt().round() as usize);
+    } else if bench {
+        let (_, first) = random_scene::blocks_and_rays(n, transparent, 1024);
+        rays = first.iter().copied().cycle().take(count).collect();
     }
     let start = Instant::now();
     let complex = Complex::new(blocks, ComplexOptions::default())?;

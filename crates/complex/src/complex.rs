@@ -5,7 +5,7 @@ use core::cell::RefCell;
 use quadric::nalgebra::{Point3, Vector3};
 use quadric::{IntervalSet, Ray};
 
-use crate::block::Spans;
+use crate::block::{SolidRef, Spans};
 use crate::bounds::block_box;
 use crate::bvh::{Bvh, RayBoxes};
 use crate::kernel::Kernel;
@@ -194,10 +194,7 @@ impl Complex {
             push(i, &sp)
         });
         for i in self.unbounded_crossed(&rb, 0.0, max_t) {
-            {
-                let sp = self.blocks[i as usize].spans(ray);
-                push(i, &sp)
-            };
+            push(i, &self.blocks[i as usize].spans(ray));
         }
         out.sort_unstable_by_key(|(id, _)| *id);
     }
@@ -313,10 +310,7 @@ impl Complex {
             consider(i, &sp)
         });
         for i in self.unbounded_crossed(rb, t, t) {
-            {
-                let sp = self.blocks[i as usize].spans(ray);
-                consider(i, &sp)
-            };
+            consider(i, &self.blocks[i as usize].spans(ray));
         }
         [opaque, transparent].into_iter().find(|&i| i != u32::MAX).map(BlockId)
     }
@@ -336,10 +330,7 @@ impl Complex {
         };
         let mut t_max = max_t;
         for i in self.unbounded_crossed(rb, tau, max_t) {
-            {
-                let sp = self.blocks[i as usize].spans(ray);
-                consider(i, &sp, &mut t_max)
-            };
+            consider(i, &self.blocks[i as usize].spans(ray), &mut t_max);
         }
         self.bvh.traverse(rb, tau, &mut t_max, |k, _, t_max| {
             let (i, sp) = (self.kernel.block(k), self.kernel.spans(k, ray, &self.blocks));
@@ -396,39 +387,42 @@ impl Complex {
             probe(i, &sp)
         });
         for i in self.unbounded_crossed(&rb, eps, eps) {
-            {
-                let sp = self.blocks[i as usize].spans(ray);
-                probe(i, &sp)
-            };
+            probe(i, &self.blocks[i as usize].spans(ray));
         }
         if run_end > eps {
             return self.run_exit(ray, &rb, run_end, max_t);
         }
         // Outside: the nearest entry after ε, lowest block id on ties (the
         // owner after the event).
-        let mut best: Option<(f64, u32, u32)> = None;
-        let mut consider = |i: u32, spans: &Spans, t_max: &mut f64| {
+        // `(t, block, solid, BVH slot)`.
+        let mut best: Option<(f64, u32, u32, Option<u32>)> = None;
+        let mut consider = |i: u32, k: Option<u32>, spans: &Spans, t_max: &mut f64| {
             if let Some(iv) = spans.as_slice().iter().find(|iv| iv.enter.t > eps) {
                 let t = iv.enter.t;
-                if t <= *t_max && best.map_or(true, |(bt, bi, _)| t < bt || (t == bt && i < bi)) {
-                    best = Some((t, i, iv.enter.solid));
+                if t <= *t_max && best.map_or(true, |(bt, bi, _, _)| t < bt || (t == bt && i < bi)) {
+                    best = Some((t, i, iv.enter.solid, k));
                     *t_max = t;
                 }
             }
         };
         let mut t_max = max_t;
         for i in self.unbounded_crossed(&rb, eps, max_t) {
-            {
-                let sp = self.blocks[i as usize].spans(ray);
-                consider(i, &sp, &mut t_max)
-            };
+            consider(i, None, &self.blocks[i as usize].spans(ray), &mut t_max);
         }
         self.bvh.traverse(&rb, eps, &mut t_max, |k, _, t_max| {
             let (i, sp) = (self.kernel.block(k), self.kernel.spans(k, ray, &self.blocks));
-            consider(i, &sp, t_max)
+            consider(i, Some(k), &sp, t_max)
         });
-        let (t, block, solid) = best?;
-        Some(self.hit(ray, t, block, solid, true))
+        let (t, block, solid, slot) = best?;
+        // The normal from the packed copy of the solid, which the test just
+        // read (the block's own copy is likely out of the caches by now).
+        let point = ray.at(t);
+        let normal = match slot.and_then(|k| self.kernel.solid(k, solid)) {
+            Some(SolidRef::HalfSpace(h)) => h.normal(),
+            Some(SolidRef::Quadric(q)) => q.normal(&point).unwrap_or_else(Vector3::zeros),
+            None => self.normal(BlockId(block), solid, &point),
+        };
+        Some(Hit { t, point, normal, entering: true, block: BlockId(block), solid })
     }
 
     /// The exit from the run of overlapping intervals containing `(ε, run_end]`.
@@ -457,10 +451,7 @@ impl Complex {
                 extend(i, &sp)
             });
             for i in self.unbounded_crossed(rb, self.epsilon, run_end) {
-                {
-                    let sp = self.blocks[i as usize].spans(ray);
-                    extend(i, &sp)
-                };
+                extend(i, &self.blocks[i as usize].spans(ray));
             }
             if next > run_end {
                 if next > max_t {

@@ -73,6 +73,22 @@ impl Kernel {
         self.slots[k as usize].block
     }
 
+    /// Solid `i` of the block in slot `k`, if the slot is packed.
+    #[inline]
+    pub(crate) fn solid(&self, k: u32, i: u32) -> Option<SolidRef<'_>> {
+        let slot = self.slots[k as usize];
+        if i >= slot.count {
+            return None;
+        }
+        // The solids before `i` of the same kind come first in their array.
+        let below = slot.quadric_mask & ((1u32 << i) - 1);
+        Some(if slot.quadric_mask & (1 << i) != 0 {
+            SolidRef::Quadric(&self.quadrics[(slot.quadric + below.count_ones()) as usize])
+        } else {
+            SolidRef::HalfSpace(&self.half_spaces[(slot.half_space + i - below.count_ones()) as usize])
+        })
+    }
+
     /// The intervals along the ray of the block in slot `k`: exactly
     /// [`Block::spans`], read from the packed solids. (Returned alone, not
     /// with the block, so that the caller's copy is the return slot: a
@@ -130,6 +146,19 @@ mod tests {
                     let packed = kernel.spans(k, ray, &blocks);
                     let plain = blocks[id as usize].spans(ray);
                     prop_assert_eq!(packed.as_slice(), plain.as_slice());
+                }
+            }
+            for k in 0..order.len() as u32 {
+                let block = &blocks[kernel.block(k) as usize];
+                for (i, s) in block.solids().iter().enumerate() {
+                    let same = match (kernel.solid(k, i as u32), s) {
+                        (Some(SolidRef::HalfSpace(a)), Solid::HalfSpace(b)) => a == b,
+                        (Some(SolidRef::Quadric(a)), Solid::Quadric(b)) => a == b,
+                        // Only blocks the kernel does not pack have no packed solids.
+                        (None, _) => !block.is_convex(),
+                        _ => false,
+                    };
+                    prop_assert!(same, "slot {} solid {}", k, i);
                 }
             }
         }
