@@ -1,10 +1,12 @@
 //! A bounding-volume hierarchy over the bounded blocks.
 //!
 //! Built once with the surface-area heuristic over binned centroids; stored
-//! flat as 32-byte nodes with `f32` boxes rounded outwards, the two children
-//! of a node side by side in one 64-byte line (so a step reads one line for
-//! both child boxes); traversed front to back with a fixed-size stack, so a
-//! query never allocates.
+//! flat, the two children of a node side by side in one aligned 128-byte
+//! pair of cache lines (so a step reads both child boxes from adjacent
+//! lines); traversed front to back with a fixed-size stack, so a query never
+//! allocates. (`f32` boxes rounded outwards, two nodes per 64-byte line,
+//! were measured too: the conversions cost as much as the smaller nodes
+//! saved, see `docs/benchmarks.md`.)
 
 use quadric::Ray;
 
@@ -22,10 +24,10 @@ pub(crate) const MAX_DEPTH: usize = 64;
 /// A node: its box and either two children or a run of blocks.
 #[derive(Clone, Copy, Debug)]
 struct Node {
-    /// Lower corner, rounded down to `f32`.
-    min: [f32; 3],
-    /// Upper corner, rounded up to `f32`.
-    max: [f32; 3],
+    /// Lower corner.
+    min: [f64; 3],
+    /// Upper corner.
+    max: [f64; 3],
     /// Inner node: index of its pair of children in `Bvh::pairs`.
     /// Leaf: index of its first entry in `Bvh::items`.
     start: u32,
@@ -33,9 +35,9 @@ struct Node {
     count: u32,
 }
 
-const EMPTY_NODE: Node = Node { min: [f32::INFINITY; 3], max: [f32::NEG_INFINITY; 3], start: 0, count: 0 };
+const EMPTY_NODE: Node = Node { min: [f64::INFINITY; 3], max: [f64::NEG_INFINITY; 3], start: 0, count: 0 };
 
-/// Two sibling nodes, aligned to a cache line.
+/// Two sibling nodes (112 bytes), aligned to a cache line.
 #[derive(Clone, Copy, Debug)]
 #[repr(align(64))]
 struct Pair([Node; 2]);
@@ -47,25 +49,6 @@ struct Pair([Node; 2]);
 pub(crate) struct Bvh {
     pairs: Vec<Pair>,
     items: Vec<u32>,
-}
-
-/// `x` rounded down to an `f32` (never above `x`).
-fn f32_down(x: f64) -> f32 {
-    let f = x as f32;
-    if f64::from(f) <= x || f.is_nan() {
-        f
-    } else if f > 0.0 {
-        f32::from_bits(f.to_bits() - 1)
-    } else if f == 0.0 {
-        -f32::from_bits(1)
-    } else {
-        f32::from_bits(f.to_bits() + 1)
-    }
-}
-
-/// `x` rounded up to an `f32` (never below `x`).
-fn f32_up(x: f64) -> f32 {
-    -f32_down(-x)
 }
 
 /// A ray prepared for slab tests: origin and reciprocal direction.
@@ -110,12 +93,10 @@ impl RayBoxes {
         (t0 <= t1 + slack).then_some(t0 - slack)
     }
 
-    /// [`RayBoxes::enter`] for a node's `f32` box (widened exactly to `f64`).
+    /// [`RayBoxes::enter`] for a node's box.
     #[inline(always)]
     fn enter_node(&self, node: &Node, t_min: f64, t_max: f64) -> Option<f64> {
-        let min = node.min.map(f64::from);
-        let max = node.max.map(f64::from);
-        self.enter(&min, &max, t_min, t_max)
+        self.enter(&node.min, &node.max, t_min, t_max)
     }
 }
 
@@ -162,12 +143,7 @@ impl Bvh {
             }
             Some(_) => self.pairs.len() as u32,
         };
-        *self.node_mut(n) = Node {
-            min: min.map(f32_down),
-            max: max.map(f32_up),
-            start,
-            count: if split.is_some() { 0 } else { work.len() as u32 },
-        };
+        *self.node_mut(n) = Node { min, max, start, count: if split.is_some() { 0 } else { work.len() as u32 } };
         if let Some(mid) = split {
             self.pairs.push(Pair([EMPTY_NODE; 2]));
             let (left, right) = work.split_at_mut(mid);
@@ -253,7 +229,7 @@ impl Bvh {
             top -= 1;
             let n = stack[top];
             let node = self.node(n);
-            if !(0..3).all(|i| f64::from(node.min[i]) <= p[i] && p[i] <= f64::from(node.max[i])) {
+            if !(0..3).all(|i| node.min[i] <= p[i] && p[i] <= node.max[i]) {
                 continue;
             }
             if node.count > 0 {
@@ -400,24 +376,4 @@ fn sah_split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<SahSp
         }
     }
     (i > 0 && i < work.len()).then_some(SahSplit::Split(i))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn f32_rounding_is_outward() {
-        let cases =
-            [0.0, -0.0, 1.0, 0.1, -0.1, 1e-40, -1e-40, 1e39, -1e39, 3.4e38, 16_777_217.0, -16_777_217.0, 1e-300];
-        for x in cases {
-            let (lo, hi) = (f32_down(x), f32_up(x));
-            assert!(f64::from(lo) <= x && x <= f64::from(hi), "{x}: [{lo}, {hi}]");
-            // Tight: at most one f32 step (or the f32 range) away.
-            if x.abs() < 3.0e38 {
-                assert!(f64::from(hi) - f64::from(lo) <= 2.0 * f64::from(f32::EPSILON) * x.abs() + 3e-45, "{x}");
-            }
-        }
-        assert_eq!((f32_down(1.0), f32_up(1.0)), (1.0, 1.0));
-    }
 }
