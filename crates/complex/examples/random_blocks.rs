@@ -6,7 +6,9 @@
 //! hierarchy), or with `--camera` the primary rays of a square image of
 //! about `RAYS` pixels in scanline order (coherent), or with `--bench` the
 //! bench's 1,024 random rays over and over (as `cargo bench` casts them:
-//! after the first round, what they touch is in the caches).
+//! after the first round, what they touch is in the caches). `--dry` does
+//! everything but cast (for subtracting counters: `perf stat` of a run
+//! minus that of the same run with `--dry` is the cost of the rays alone).
 //!
 //! Under callgrind, count only the rays:
 //! `valgrind --tool=callgrind --toggle-collect='*cast_rays*' target/release/examples/random_blocks 100000`.
@@ -25,6 +27,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let transparent = args.iter().any(|a| a == "--transparent");
     let camera = args.iter().any(|a| a == "--camera");
     let bench = args.iter().any(|a| a == "--bench");
+    // Everything but the casting: subtracting such a run's counters from a
+    // full run's leaves the cost of the rays alone.
+    let dry = args.iter().any(|a| a == "--dry");
     let mut numbers = args.iter().filter(|a| !a.starts_with("--")).map(|a| a.parse::<usize>());
     let n = numbers.next().transpose()?.unwrap_or(100_000);
     let count = numbers.next().transpose()?.unwrap_or(100_000);
@@ -39,7 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let complex = Complex::new(blocks, ComplexOptions::default())?;
     let build = start.elapsed();
     let start = Instant::now();
-    let hits = cast_rays(&complex, &rays);
+    let hits = if dry { 0 } else { cast_rays(&complex, &rays) };
     let cast = start.elapsed();
     println!(
         "{n} blocks: build {:.1} ms; {} rays in {:.1} ms = {:.3} M rays/s; {hits} hits",

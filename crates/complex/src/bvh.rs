@@ -1,9 +1,9 @@
 //! A bounding-volume hierarchy over the bounded blocks.
 //!
 //! Built once with the surface-area heuristic over binned centroids; stored
-//! flat, the two children of a node side by side in one aligned 128-byte
-//! pair of cache lines (so a step reads both child boxes from adjacent
-//! lines); traversed front to back with a fixed-size stack, so a query never
+//! flat, the two children of a node side by side in 128 bytes aligned to a
+//! cache line (so a step reads both child boxes from two adjacent lines);
+//! traversed front to back with a fixed-size stack, so a query never
 //! allocates. (`f32` boxes rounded outwards, two nodes per 64-byte line,
 //! were measured too: the conversions cost as much as the smaller nodes
 //! saved, see `docs/benchmarks.md`.)
@@ -37,7 +37,7 @@ struct Node {
 
 const EMPTY_NODE: Node = Node { min: [f64::INFINITY; 3], max: [f64::NEG_INFINITY; 3], start: 0, count: 0 };
 
-/// Two sibling nodes (112 bytes), aligned to a cache line.
+/// Two sibling nodes (112 bytes, padded to 128), aligned to a cache line.
 #[derive(Clone, Copy, Debug)]
 #[repr(align(64))]
 struct Pair([Node; 2]);
@@ -90,7 +90,9 @@ impl RayBoxes {
             }
         }
         let slack = 4.0 * f64::EPSILON * t1.abs().max(t0.abs());
-        (t0 <= t1 + slack).then_some(t0 - slack)
+        // `t0 = ∞` (a parallel ray outside a slab on its far side) would pass
+        // `t0 <= t1 + ∞`: a miss.
+        (t0 < f64::INFINITY && t0 <= t1 + slack).then_some(t0 - slack)
     }
 
     /// [`RayBoxes::enter`] for a node's box.
@@ -376,4 +378,43 @@ fn sah_split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<SahSp
         }
     }
     (i > 0 && i < work.len()).then_some(SahSplit::Split(i))
+}
+
+#[cfg(test)]
+mod tests {
+    use quadric::nalgebra::{Point3, Vector3};
+
+    use super::*;
+
+    /// Rays parallel to slabs (reciprocals `±∞`): inside, on the boundary,
+    /// outside on either side, along both directions of each axis.
+    #[test]
+    fn slab_test_with_axis_parallel_rays() {
+        let (min, max) = ([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]);
+        let check = |origin: [f64; 3], dir: [f64; 3], expected: bool| {
+            let ray = Ray::new(Point3::from(origin), Vector3::from(dir)).expect("valid");
+            let got = RayBoxes::new(&ray).enter(&min, &max, 0.0, f64::INFINITY);
+            assert_eq!(got.is_some(), expected, "{origin:?} along {dir:?}: {got:?}");
+            assert!(got.map_or(true, |t| !t.is_nan()), "{origin:?} along {dir:?}: NaN entry");
+        };
+        for axis in 0..3 {
+            for sign in [1.0, -1.0] {
+                let mut dir = [0.0; 3];
+                dir[axis] = sign;
+                // The ray starts 2 units before the box along its axis.
+                let start = if sign > 0.0 { -2.0 } else { 3.0 };
+                for (off, expected) in [(0.5, true), (0.0, true), (1.0, true), (-0.5, false), (1.5, false)] {
+                    let mut origin = [0.5; 3];
+                    origin[axis] = start;
+                    // Offset across one of the other axes.
+                    origin[(axis + 1) % 3] = off;
+                    check(origin, dir, expected);
+                }
+                // Pointing away from the box: a miss.
+                let mut origin = [0.5; 3];
+                origin[axis] = if sign > 0.0 { 3.0 } else { -2.0 };
+                check(origin, dir, false);
+            }
+        }
+    }
 }
