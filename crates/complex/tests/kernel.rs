@@ -96,3 +96,48 @@ fn concentric_blocks_answer_like_brute_force() {
     assert_eq!((hit.entering, hit.block.0), (false, 199));
     assert!((hit.t - (200.0f64 * 200.0 - 0.25).sqrt()).abs() < 1e-9 * 200.0, "{}", hit.t);
 }
+
+/// Rays along the axes (reciprocal directions `±∞` in the slab tests),
+/// some exactly in the planes of box faces, through a grid of cubes and
+/// balls: the BVH answers like brute force.
+#[test]
+fn axis_parallel_rays_answer_like_brute_force() {
+    let mut blocks = Vec::new();
+    for i in 0..4 {
+        for j in 0..4 {
+            for k in 0..4 {
+                let (x, y, z) = (3.0 * i as f64, 3.0 * j as f64, 3.0 * k as f64);
+                let solids = if (i + j + k) % 2 == 0 {
+                    crate::common::cuboid([x, y, z], [x + 1.0, y + 1.0, z + 1.0])
+                } else {
+                    let m = Transform::translate(Vector3::new(x + 0.5, y + 0.5, z + 0.5)).expect("finite");
+                    vec![Solid::from(Quadric::sphere().transformed(&Transform::scale(0.5).expect("finite").then(&m)))]
+                };
+                blocks.push(Block::new("cell", solids, O, MaterialKey(0)).expect("valid"));
+            }
+        }
+    }
+    let c = Complex::new(blocks, ComplexOptions::default()).expect("valid");
+    let mut checked = 0;
+    for axis in 0..3 {
+        for sign in [1.0, -1.0] {
+            let mut dir = Vector3::zeros();
+            dir[axis] = sign;
+            // Across the other two axes: cell centres, face planes and gaps.
+            for a in [0.0, 0.5, 1.0, 2.0, 3.0, 6.5, 10.0] {
+                for b in [0.0, 0.5, 1.0, 4.0, 9.5] {
+                    let mut origin = Point3::new(a, a, a);
+                    origin[(axis + 1) % 3] = a;
+                    origin[(axis + 2) % 3] = b;
+                    origin[axis] = if sign > 0.0 { -5.0 } else { 15.0 };
+                    let ray = Ray::new(origin, dir).expect("valid");
+                    let hit = c.cast_ray(&ray, f64::INFINITY).map(|h| (h.t, h.block.0));
+                    assert_eq!(hit, brute_first_entry(&c, &ray), "ray from {origin} along {dir}");
+                    checked += usize::from(hit.is_some());
+                }
+            }
+        }
+    }
+    // Most of these rays hit something: the test is not vacuous.
+    assert!(checked > 100, "{checked}");
+}
