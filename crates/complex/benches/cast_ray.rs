@@ -1,99 +1,64 @@
-//! `cast_ray` over 10, 1,000 and 100,000 random bounded blocks, all opaque
-//! or every other one transparent.
+//! `cast_ray` over 10 to 100,000 random bounded blocks, all opaque or every
+//! other one transparent; and the build of such a complex.
 //!
 //! `cargo bench -p complex --bench cast_ray`. The blocks (balls, capped
 //! tubes and rotated boxes, radius 0.3–0.6) fill a cube whose side grows as
 //! `N^(1/3)`, so the density stays fixed; each iteration casts 1,024 rays
-//! from outside the cube at random points inside it.
+//! from outside the cube at random points inside it; `cast_ray_camera`
+//! casts the 16,384 primary rays of a camera instead.
 
-use complex::{Block, Complex, ComplexOptions, MaterialKey, Opacity};
+use complex::{Complex, ComplexOptions};
 use divan::counter::ItemsCount;
-use quadric::nalgebra::{Point3, Vector3};
-use quadric::{HalfSpace, Quadric, Ray, Solid, Transform};
+use quadric::Ray;
+
+mod random_scene;
+use random_scene::{blocks_and_rays, camera_rays, scene};
 
 fn main() {
     divan::main();
 }
 
-/// xorshift64*: a small deterministic generator, so the bench needs no `rand`.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.next()
-    }
-}
-
-fn hs(a: f64, b: f64, c: f64, d: f64) -> Solid {
-    Solid::from(HalfSpace::new(a, b, c, d).expect("valid"))
-}
-
-fn scene(n: usize, transparent: bool) -> (Complex, Vec<Ray>) {
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ n as u64);
-    let side = 2.0 * (n as f64).cbrt();
-    let mut blocks = Vec::with_capacity(n);
-    for _ in 0..n {
-        let r = rng.range(0.3, 0.6);
-        let m = Transform::scale(r)
-            .and_then(|s| Ok(s.then(&Transform::rotate_x_degrees(rng.range(0.0, 360.0))?)))
-            .and_then(|s| Ok(s.then(&Transform::rotate_y_degrees(rng.range(0.0, 360.0))?)))
-            .and_then(|s| {
-                let c = Vector3::new(rng.range(0.0, side), rng.range(0.0, side), rng.range(0.0, side));
-                Ok(s.then(&Transform::translate(c)?))
-            })
-            .expect("finite");
-        let unit: Vec<Solid> = match (rng.next() * 3.0) as u32 {
-            0 => vec![Solid::from(Quadric::sphere())],
-            1 => vec![Solid::from(Quadric::tube_y()), hs(0.0, 1.0, 0.0, -1.0), hs(0.0, -1.0, 0.0, -1.0)],
-            _ => vec![
-                hs(1.0, 0.0, 0.0, -1.0),
-                hs(-1.0, 0.0, 0.0, -1.0),
-                hs(0.0, 1.0, 0.0, -1.0),
-                hs(0.0, -1.0, 0.0, -1.0),
-                hs(0.0, 0.0, 1.0, -1.0),
-                hs(0.0, 0.0, -1.0, -1.0),
-            ],
-        };
-        let solids = unit.iter().map(|s| s.transformed(&m)).collect();
-        // Every other block transparent, in one of two materials.
-        let opacity = if transparent && blocks.len() % 2 == 0 { Opacity::Transparent } else { Opacity::Opaque };
-        blocks.push(Block::new("b", solids, opacity, MaterialKey(blocks.len() as u32 / 2 % 2)).expect("valid"));
-    }
-    let rays = (0..1024)
-        .map(|_| {
-            let eye = Point3::new(rng.range(-side, 2.0 * side), rng.range(-side, 2.0 * side), -side);
-            let target = Point3::new(rng.range(0.0, side), rng.range(0.0, side), rng.range(0.0, side));
-            Ray::new(eye, target - eye).expect("valid")
-        })
-        .collect();
-    (Complex::new(blocks, ComplexOptions::default()).expect("valid"), rays)
-}
-
-#[divan::bench(args = [10, 1_000, 100_000], sample_count = 20, sample_size = 4)]
+#[divan::bench(args = [10, 100, 1_000, 10_000, 100_000], sample_count = 20, sample_size = 4)]
 fn cast_ray(bencher: divan::Bencher, n: usize) {
     run(bencher, n, false);
 }
 
 /// The same scenes with every other block transparent: the path that
 /// walks interval ends until the medium changes.
-#[divan::bench(args = [10, 1_000, 100_000], sample_count = 20, sample_size = 4)]
+#[divan::bench(args = [10, 100, 1_000, 10_000, 100_000], sample_count = 20, sample_size = 4)]
 fn cast_ray_half_transparent(bencher: divan::Bencher, n: usize) {
     run(bencher, n, true);
 }
 
+/// The opaque scenes seen by a 128×128 pinhole camera, rays in scanline
+/// order: coherent rays, as a renderer casts them.
+#[divan::bench(args = [100, 100_000], sample_count = 20, sample_size = 1)]
+fn cast_ray_camera(bencher: divan::Bencher, n: usize) {
+    let (c, _) = scene(n, false);
+    cast(bencher, &c, &camera_rays(n, 128));
+}
+
 fn run(bencher: divan::Bencher, n: usize, transparent: bool) {
     let (c, rays) = scene(n, transparent);
+    cast(bencher, &c, &rays);
+}
+
+fn cast(bencher: divan::Bencher, c: &Complex, rays: &[Ray]) {
     bencher.counter(ItemsCount::new(rays.len())).bench_local(|| {
         let mut hits = 0usize;
-        for r in &rays {
+        for r in rays {
             hits += usize::from(c.cast_ray(divan::black_box(r), f64::INFINITY).is_some());
         }
         hits
     });
+}
+
+/// `Complex::new` (a box per block, then the BVH) for the opaque scenes.
+#[divan::bench(args = [1_000, 100_000], sample_count = 5, sample_size = 1)]
+fn build(bencher: divan::Bencher, n: usize) {
+    let (blocks, _) = blocks_and_rays(n, false, 0);
+    bencher
+        .counter(ItemsCount::new(n))
+        .with_inputs(|| blocks.clone())
+        .bench_local_values(|b| Complex::new(b, ComplexOptions::default()).expect("valid"));
 }

@@ -1,6 +1,6 @@
 //! Blocks: intersections of solids.
 
-use quadric::{IntervalSet, Ray, Solid};
+use quadric::{Bound, HalfSpace, Interval, IntervalSet, Quadric, Ray, Solid};
 
 use crate::ComplexError;
 
@@ -54,6 +54,41 @@ pub struct Block {
     solids: Vec<Solid>,
     opacity: Opacity,
     material: MaterialKey,
+    /// Every solid is convex, so a ray meets the block in at most one
+    /// interval: [`Block::spans`] then keeps two bounds instead of sets.
+    convex: bool,
+}
+
+/// A block's intervals along a ray: without an interval set (and the copies
+/// of its fixed-size buffer) when there is at most one.
+// Boxing the set would allocate per ray; the big variant is the rare one.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Spans {
+    Empty,
+    One(Interval),
+    Many(IntervalSet),
+}
+
+impl Spans {
+    /// The intervals, sorted.
+    #[inline]
+    pub(crate) fn as_slice(&self) -> &[Interval] {
+        match self {
+            Spans::Empty => &[],
+            Spans::One(iv) => core::slice::from_ref(iv),
+            Spans::Many(set) => set.as_slice(),
+        }
+    }
+
+    #[inline]
+    pub(crate) fn set(&self) -> IntervalSet {
+        match self {
+            Spans::Empty => IntervalSet::empty(),
+            Spans::One(iv) => IntervalSet::from_interval(iv.enter, iv.exit),
+            Spans::Many(set) => *set,
+        }
+    }
 }
 
 impl Block {
@@ -82,7 +117,7 @@ impl Block {
         if non_convex >= IntervalSet::CAPACITY {
             return Err(ComplexError::TooManyNonConvex { name, count: non_convex, max: IntervalSet::CAPACITY - 1 });
         }
-        Ok(Block { name, solids, opacity, material })
+        Ok(Block { name, solids, opacity, material, convex: non_convex == 0 })
     }
 
     /// The block's name.
@@ -119,6 +154,31 @@ impl Block {
     /// sets, each end tagged with the index of the solid it lies on. Stops as
     /// soon as the running set is empty (seed 001's loop).
     pub fn intervals(&self, ray: &Ray) -> IntervalSet {
+        self.spans(ray).set()
+    }
+
+    /// [`Block::intervals`] without building a set for a convex block.
+    #[inline]
+    pub(crate) fn spans(&self, ray: &Ray) -> Spans {
+        if self.convex {
+            let solids = self.solids.iter().map(|s| match s {
+                Solid::HalfSpace(h) => SolidRef::HalfSpace(h),
+                Solid::Quadric(q) => SolidRef::Quadric(q),
+            });
+            if let Some(spans) = convex_spans(ray, solids) {
+                return spans;
+            }
+        }
+        self.spans_general(ray)
+    }
+
+    /// Whether every solid is convex.
+    pub(crate) fn is_convex(&self) -> bool {
+        self.convex
+    }
+
+    /// Intersection of interval sets, for blocks with non-convex solids.
+    pub(crate) fn spans_general(&self, ray: &Ray) -> Spans {
         let mut acc = IntervalSet::everything().clip(0.0, f64::INFINITY);
         for (i, s) in self.solids.iter().enumerate() {
             let i = i as u32;
@@ -137,6 +197,45 @@ impl Block {
                 break;
             }
         }
-        acc
+        Spans::Many(acc)
     }
+}
+
+/// A solid of a block, wherever it is stored.
+#[derive(Clone, Copy)]
+pub(crate) enum SolidRef<'a> {
+    HalfSpace(&'a HalfSpace),
+    Quadric(&'a Quadric),
+}
+
+/// The intervals of a block of convex solids, given in block order: the
+/// running intersection kept as two bounds, found by the same comparisons in
+/// the same order as `IntervalSet::intersect` (on equal `t` the earlier
+/// solid's end is kept), so the bounds and their solid tags are those of
+/// [`Block::intervals`]' set path. `None` if a quadric gave more than one
+/// interval after all (then the caller takes the exact general path).
+#[inline(always)]
+pub(crate) fn convex_spans<'a>(ray: &Ray, solids: impl Iterator<Item = SolidRef<'a>>) -> Option<Spans> {
+    let (mut enter, mut exit) = (Bound::free(0.0), Bound::free(f64::INFINITY));
+    for (i, s) in solids.enumerate() {
+        let (e, x) = match s {
+            SolidRef::HalfSpace(h) => h.interval(ray, i as u32),
+            SolidRef::Quadric(q) => match *q.intervals(ray, i as u32).as_slice() {
+                [] => return Some(Spans::Empty),
+                [iv] => (iv.enter, iv.exit),
+                _ => return None,
+            },
+        };
+        if e.t > enter.t {
+            enter = e;
+        }
+        if x.t < exit.t {
+            exit = x;
+        }
+        // Not less (equal, greater or NaN): empty, like `IntervalSet`.
+        if enter.t.partial_cmp(&exit.t) != Some(core::cmp::Ordering::Less) {
+            return Some(Spans::Empty);
+        }
+    }
+    Some(Spans::One(Interval::new(enter, exit)))
 }

@@ -5,8 +5,10 @@ use core::cell::RefCell;
 use quadric::nalgebra::{Point3, Vector3};
 use quadric::{IntervalSet, Ray};
 
+use crate::block::{SolidRef, Spans};
 use crate::bounds::block_box;
 use crate::bvh::{Bvh, RayBoxes};
+use crate::kernel::Kernel;
 use crate::partition::{Event, Partition, Segment, Surface};
 use crate::{Aabb, Block, BlockId, ComplexError, Opacity};
 
@@ -67,6 +69,8 @@ pub struct Complex {
     boxes: Vec<Aabb>,
     /// Bounded, non-empty blocks.
     bvh: Bvh,
+    /// The bounded blocks' solids packed in the BVH's leaf order.
+    kernel: Kernel,
     /// Blocks with an infinite box: tested for every ray.
     unbounded: Vec<u32>,
     epsilon: f64,
@@ -120,8 +124,9 @@ impl Complex {
             }
         });
         let bvh = Bvh::build(&bounded);
+        let kernel = Kernel::new(bvh.items(), &blocks);
         let any_transparent = blocks.iter().any(Block::is_transparent);
-        Ok(Complex { blocks, boxes, bvh, unbounded, epsilon, any_transparent })
+        Ok(Complex { blocks, boxes, bvh, kernel, unbounded, epsilon, any_transparent })
     }
 
     /// The blocks in priority order.
@@ -176,17 +181,20 @@ impl Complex {
     /// crosses before `max_t`, sorted by block id.
     fn collect_sets(&self, ray: &Ray, max_t: f64, out: &mut Vec<(BlockId, IntervalSet)>) {
         out.clear();
-        let mut push = |i: u32| {
-            let set = self.without_epsilon(self.blocks[i as usize].intervals(ray));
+        let mut push = |i: u32, spans: &Spans| {
+            let set = self.without_epsilon(spans.set());
             if !set.is_empty() {
                 out.push((BlockId(i), set));
             }
         };
         let rb = RayBoxes::new(ray);
         let mut t_max = max_t;
-        self.bvh.traverse(&rb, 0.0, &mut t_max, |i, _, _| push(i));
+        self.bvh.traverse(&rb, 0.0, &mut t_max, |k, _, _| {
+            let (i, sp) = (self.kernel.block(k), self.kernel.spans(k, ray, &self.blocks));
+            push(i, &sp)
+        });
         for i in self.unbounded_crossed(&rb, 0.0, max_t) {
-            push(i);
+            push(i, &self.blocks[i as usize].spans(ray));
         }
         out.sort_unstable_by_key(|(id, _)| *id);
     }
@@ -290,17 +298,19 @@ impl Complex {
     /// `enter <= t < exit`, by the priority rule.
     fn owner_after(&self, ray: &Ray, rb: &RayBoxes, t: f64) -> Option<BlockId> {
         let (mut opaque, mut transparent) = (u32::MAX, u32::MAX);
-        let mut consider = |i: u32| {
-            let b = &self.blocks[i as usize];
-            let best = if b.is_transparent() { &mut transparent } else { &mut opaque };
-            if i < *best && b.intervals(ray).iter().any(|iv| iv.enter.t <= t && t < iv.exit.t) {
+        let mut consider = |i: u32, spans: &Spans| {
+            let best = if self.blocks[i as usize].is_transparent() { &mut transparent } else { &mut opaque };
+            if i < *best && spans.as_slice().iter().any(|iv| iv.enter.t <= t && t < iv.exit.t) {
                 *best = i;
             }
         };
         let mut t_hi = t;
-        self.bvh.traverse(rb, t, &mut t_hi, |i, _, _| consider(i));
+        self.bvh.traverse(rb, t, &mut t_hi, |k, _, _| {
+            let (i, sp) = (self.kernel.block(k), self.kernel.spans(k, ray, &self.blocks));
+            consider(i, &sp)
+        });
         for i in self.unbounded_crossed(rb, t, t) {
-            consider(i);
+            consider(i, &self.blocks[i as usize].spans(ray));
         }
         [opaque, transparent].into_iter().find(|&i| i != u32::MAX).map(BlockId)
     }
@@ -308,8 +318,8 @@ impl Complex {
     /// The smallest finite end of any block's interval in `(tau, max_t]`.
     fn next_end(&self, ray: &Ray, rb: &RayBoxes, tau: f64, max_t: f64) -> Option<f64> {
         let mut best: Option<f64> = None;
-        let mut consider = |i: u32, t_max: &mut f64| {
-            for iv in self.blocks[i as usize].intervals(ray).iter() {
+        let mut consider = |_: u32, spans: &Spans, t_max: &mut f64| {
+            for iv in spans.as_slice() {
                 for e in [iv.enter.t, iv.exit.t] {
                     if e > tau && e <= *t_max && e.is_finite() && best.map_or(true, |b| e < b) {
                         best = Some(e);
@@ -320,9 +330,12 @@ impl Complex {
         };
         let mut t_max = max_t;
         for i in self.unbounded_crossed(rb, tau, max_t) {
-            consider(i, &mut t_max);
+            consider(i, &self.blocks[i as usize].spans(ray), &mut t_max);
         }
-        self.bvh.traverse(rb, tau, &mut t_max, |i, _, t_max| consider(i, t_max));
+        self.bvh.traverse(rb, tau, &mut t_max, |k, _, t_max| {
+            let (i, sp) = (self.kernel.block(k), self.kernel.spans(k, ray, &self.blocks));
+            consider(i, &sp, t_max)
+        });
         best
     }
 
@@ -342,14 +355,14 @@ impl Complex {
     /// starts there, else the exit of the old one (as in the partition).
     fn event_hit(&self, ray: &Ray, t: f64, before: Option<BlockId>, after: Option<BlockId>) -> Option<Hit> {
         let entry = after.and_then(|id| {
-            let set = self.blocks[id.index()].intervals(ray);
-            let solid = set.iter().find(|iv| iv.enter.t == t)?.enter.solid()?;
+            let set = self.blocks[id.index()].spans(ray);
+            let solid = set.as_slice().iter().find(|iv| iv.enter.t == t)?.enter.solid()?;
             Some(self.hit(ray, t, id.0, solid, true))
         });
         entry.or_else(|| {
             let id = before?;
-            let set = self.blocks[id.index()].intervals(ray);
-            let solid = set.iter().find(|iv| iv.exit.t == t)?.exit.solid()?;
+            let set = self.blocks[id.index()].spans(ray);
+            let solid = set.as_slice().iter().find(|iv| iv.exit.t == t)?.exit.solid()?;
             Some(self.hit(ray, t, id.0, solid, false))
         })
     }
@@ -361,41 +374,55 @@ impl Complex {
         // Is the ray inside the union just after ε? Then the answer is the end
         // of the run of overlapping intervals it is in.
         let mut run_end = eps;
-        let mut probe = |i: u32| {
-            for iv in self.blocks[i as usize].intervals(ray).iter() {
+        let mut probe = |_: u32, spans: &Spans| {
+            for iv in spans.as_slice() {
                 if iv.enter.t <= eps && eps < iv.exit.t {
                     run_end = run_end.max(iv.exit.t);
                 }
             }
         };
         let mut t_probe = eps;
-        self.bvh.traverse(&rb, eps, &mut t_probe, |i, _, _| probe(i));
+        self.bvh.traverse(&rb, eps, &mut t_probe, |k, _, _| {
+            let (i, sp) = (self.kernel.block(k), self.kernel.spans(k, ray, &self.blocks));
+            probe(i, &sp)
+        });
         for i in self.unbounded_crossed(&rb, eps, eps) {
-            probe(i);
+            probe(i, &self.blocks[i as usize].spans(ray));
         }
         if run_end > eps {
             return self.run_exit(ray, &rb, run_end, max_t);
         }
         // Outside: the nearest entry after ε, lowest block id on ties (the
         // owner after the event).
-        let mut best: Option<(f64, u32, u32)> = None;
-        let mut consider = |i: u32, t_max: &mut f64| {
-            let set = self.blocks[i as usize].intervals(ray);
-            if let Some(iv) = set.iter().find(|iv| iv.enter.t > eps) {
+        // `(t, block, solid, BVH slot)`.
+        let mut best: Option<(f64, u32, u32, Option<u32>)> = None;
+        let mut consider = |i: u32, k: Option<u32>, spans: &Spans, t_max: &mut f64| {
+            if let Some(iv) = spans.as_slice().iter().find(|iv| iv.enter.t > eps) {
                 let t = iv.enter.t;
-                if t <= *t_max && best.map_or(true, |(bt, bi, _)| t < bt || (t == bt && i < bi)) {
-                    best = Some((t, i, iv.enter.solid));
+                if t <= *t_max && best.map_or(true, |(bt, bi, _, _)| t < bt || (t == bt && i < bi)) {
+                    best = Some((t, i, iv.enter.solid, k));
                     *t_max = t;
                 }
             }
         };
         let mut t_max = max_t;
         for i in self.unbounded_crossed(&rb, eps, max_t) {
-            consider(i, &mut t_max);
+            consider(i, None, &self.blocks[i as usize].spans(ray), &mut t_max);
         }
-        self.bvh.traverse(&rb, eps, &mut t_max, |i, _, t_max| consider(i, t_max));
-        let (t, block, solid) = best?;
-        Some(self.hit(ray, t, block, solid, true))
+        self.bvh.traverse(&rb, eps, &mut t_max, |k, _, t_max| {
+            let (i, sp) = (self.kernel.block(k), self.kernel.spans(k, ray, &self.blocks));
+            consider(i, Some(k), &sp, t_max)
+        });
+        let (t, block, solid, slot) = best?;
+        // The normal from the packed copy of the solid, which the test just
+        // read (the block's own copy is likely out of the caches by now).
+        let point = ray.at(t);
+        let normal = match slot.and_then(|k| self.kernel.solid(k, solid)) {
+            Some(SolidRef::HalfSpace(h)) => h.normal(),
+            Some(SolidRef::Quadric(q)) => q.normal(&point).unwrap_or_else(Vector3::zeros),
+            None => self.normal(BlockId(block), solid, &point),
+        };
+        Some(Hit { t, point, normal, entering: true, block: BlockId(block), solid })
     }
 
     /// The exit from the run of overlapping intervals containing `(ε, run_end]`.
@@ -405,8 +432,8 @@ impl Complex {
             // The lowest block id whose interval ends exactly at `next`: the
             // owner just before the exit.
             let mut owner: Option<(u32, u32)> = None;
-            let mut extend = |i: u32| {
-                for iv in self.blocks[i as usize].intervals(ray).iter() {
+            let mut extend = |i: u32, spans: &Spans| {
+                for iv in spans.as_slice() {
                     if iv.enter.t <= run_end && iv.exit.t >= next {
                         if iv.exit.t > next {
                             next = iv.exit.t;
@@ -419,9 +446,12 @@ impl Complex {
                 }
             };
             let mut t_hi = run_end;
-            self.bvh.traverse(rb, self.epsilon, &mut t_hi, |i, _, _| extend(i));
+            self.bvh.traverse(rb, self.epsilon, &mut t_hi, |k, _, _| {
+                let (i, sp) = (self.kernel.block(k), self.kernel.spans(k, ray, &self.blocks));
+                extend(i, &sp)
+            });
             for i in self.unbounded_crossed(rb, self.epsilon, run_end) {
-                extend(i);
+                extend(i, &self.blocks[i as usize].spans(ray));
             }
             if next > run_end {
                 if next > max_t {

@@ -14,6 +14,7 @@ mod bounds;
 mod bvh;
 mod complex;
 mod error;
+mod kernel;
 mod partition;
 
 pub use block::{Block, BlockId, MaterialKey, Opacity};
