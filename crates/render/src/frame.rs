@@ -1,5 +1,6 @@
 //! The render loop: one ray per pixel centre, rows in parallel.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use quadric::nalgebra::Vector3;
@@ -75,6 +76,18 @@ pub const MAX_PIXELS: u64 = 1 << 28;
 /// Renders `world` with its camera. `progress` is called once per finished
 /// row (from worker threads).
 pub fn render(world: &World, options: Options, progress: &(dyn Fn() + Sync)) -> Result<(Frame, Stats), Error> {
+    render_until(world, options, progress, &AtomicBool::new(false))
+}
+
+/// [`render`], stopping early with [`Error::Interrupted`] once `cancel` is
+/// set (e.g. by a Ctrl-C handler). Workers look at the flag before each row,
+/// so the render stops within about one row's time per thread.
+pub fn render_until(
+    world: &World,
+    options: Options,
+    progress: &(dyn Fn() + Sync),
+    cancel: &AtomicBool,
+) -> Result<(Frame, Stats), Error> {
     let pixels = u64::from(world.camera.width()) * u64::from(world.camera.height());
     if pixels > MAX_PIXELS {
         return Err(Error::Options(format!(
@@ -94,6 +107,9 @@ pub fn render(world: &World, options: Options, progress: &(dyn Fn() + Sync)) -> 
         (0..world.camera.height())
             .into_par_iter()
             .map(|i| {
+                if cancel.load(Ordering::Relaxed) {
+                    return (Vec::new(), 0);
+                }
                 let row = render_row(world, i);
                 progress();
                 row
@@ -101,6 +117,9 @@ pub fn render(world: &World, options: Options, progress: &(dyn Fn() + Sync)) -> 
             .unzip()
     });
     let elapsed = start.elapsed();
+    if cancel.load(Ordering::Relaxed) {
+        return Err(Error::Interrupted);
+    }
     let pixels = rows.into_iter().flatten().collect();
     let frame = Frame { width: world.camera.width(), height: world.camera.height(), pixels };
     Ok((frame, Stats { rays: rays.iter().sum(), elapsed }))

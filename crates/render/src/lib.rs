@@ -35,6 +35,7 @@ pub mod trace;
 use std::path::Path;
 
 pub use error::{nearest, Error, SceneError};
+pub use output::check_writable;
 
 /// Reads and converts a scene file.
 pub fn load(path: &Path) -> Result<scene::World, Error> {
