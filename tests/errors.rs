@@ -114,7 +114,7 @@ fn nested(levels: usize) -> String {
 fn syntax_errors_name_line_and_column() {
     check("{\n  \"camera\": {\n    \"eye\": [0, 0, 5],,\n", 1, &["bad.json: camera, line 3, column 22"]);
     check("", 1, &["line 1, column 0", "EOF"]);
-    check(&*blocks(r#"{ "name": "a" "objects": [] }"#), 1, &["blocks[0], line 1, column 108: expected `,` or `}`"]);
+    check(&*blocks(r#"{ "name": "a" "objects": [] }"#), 1, &["blocks[0], line 1, column 111: expected `,` or `}`"]);
 }
 
 #[test]
@@ -274,11 +274,15 @@ fn bad_settings_and_materials() {
     check(&*with_camera(cam, r#"{ "max_depth": 1000000 }"#), 1, &["settings.max_depth", "at most 64"]);
     check(&*with_camera(cam, r#"{ "background": [-1, 0, 0] }"#), 1, &["settings.background", "must not be negative"]);
     check(&*with_camera(cam, r#"{ "ambient": [0, -0.1, 0] }"#), 1, &["settings.ambient", "must not be negative"]);
-    check(&*with_material(r#"{ "ior": 0 }"#), 1, &["materials.m, line 1", "ior must be finite and > 0"]);
-    check(&*with_material(r#"{ "ior": -1.5 }"#), 1, &["materials.m", "ior must be finite and > 0"]);
+    check(&*with_material(r#"{ "ior": 0 }"#), 1, &["materials.m.ior, line 1", "ior must be finite and > 0, got 0"]);
+    check(&*with_material(r#"{ "ior": -1.5 }"#), 1, &["materials.m.ior", "got -1.5"]);
     check(&*with_material(r#"{ "diffuse": [-1, 0, 0] }"#), 1, &["materials.m.diffuse, line 1", "must not be negative"]);
     check(&*with_material(r#"{ "transmit": [0, 0, -0.5] }"#), 1, &["materials.m.transmit", "must not be negative"]);
-    check(&*with_material(r#"{ "shininess": -2 }"#), 1, &["materials.m", "shininess must be finite and >= 0"]);
+    check(
+        &*with_material(r#"{ "shininess": -2 }"#),
+        1,
+        &["materials.m.shininess, line 1", "shininess must be finite and >= 0, got -2"],
+    );
     check(
         &*format!(
             r#"{{ {CAMERA}, "lights": [ {{ "position": [0, 0, 9], "color": [1, -1, 1] }} ], "blocks": [ {{ "objects": [ {{ "sphere": {{}} }} ] }} ] }}"#
@@ -353,7 +357,7 @@ fn bad_option_values_exit_1() {
     check(
         &["trace", "ok.json", "--origin", "0", "0", "5", "--direction", "0", "0", "0"],
         1,
-        &["the ray direction is zero"],
+        &["--origin/--direction: the ray direction is zero"],
     );
     check(&["check", "bad-file-name.json"], 3, &["bad-file-name.json"]);
 }
@@ -363,7 +367,11 @@ fn usage_errors_exit_2() {
     check(&["render"], 2, &["required arguments were not provided", "<SCENE>"]);
     check(&["render", "ok.json", "--bogus"], 2, &["unexpected argument '--bogus'"]);
     check(&["render", "ok.json", "--threads", "many"], 2, &["invalid value 'many' for '--threads <N>'"]);
-    check(&["trace", "ok.json", "--origin", "0", "0"], 2, &["--origin"]);
+    check(
+        &["trace", "ok.json", "--origin", "0", "0"],
+        2,
+        &["3 values required for '--origin <X> <Y> <Z>' but 2 were provided"],
+    );
     check(&["paint", "ok.json"], 2, &["unrecognized subcommand 'paint'"]);
     check(&[""; 0], 2, &["Usage: komplex <COMMAND>"]);
 }

@@ -554,10 +554,12 @@ impl SceneFile {
                 colour(t, &format!("{place}.{what}"), what)?;
             }
             if !(m.shininess.is_finite() && m.shininess >= 0.0) {
-                return Err(SceneError::semantic(&place, "shininess must be finite and >= 0"));
+                let msg = format!("shininess must be finite and >= 0, got {}", m.shininess);
+                return Err(SceneError::semantic(&format!("{place}.shininess"), msg));
             }
             if !(m.ior.is_finite() && m.ior > 0.0) {
-                return Err(SceneError::semantic(&place, "ior must be finite and > 0"));
+                let msg = format!("ior must be finite and > 0, got {}", m.ior);
+                return Err(SceneError::semantic(&format!("{place}.ior"), msg));
             }
             materials.push(Material {
                 name: name.clone(),
