@@ -340,6 +340,12 @@ fn outputs_that_cannot_be_written_exit_3_before_rendering() {
         &["/proc/out.exr: cannot create a file in directory /proc"],
     );
     check(&["render", "ok.json", "-o", "dir.json"], 3, &["dir.json: is a directory, not a file"]);
+    // Renaming over a special file would replace it (think `-o /dev/null`).
+    let fifo = tempdir();
+    let pipe = fifo.path().join("pipe");
+    assert!(std::process::Command::new("mkfifo").arg(&pipe).status().unwrap().success());
+    check(&["render", "ok.json", "-o", pipe.to_str().unwrap()], 3, &["pipe: is not a regular file"]);
+    assert!(pipe.exists() && !pipe.is_file(), "the pipe was replaced");
     // A bad preview path fails before the EXR is written, not after.
     check(&["render", "ok.json", "-o", "out.exr", "--png", "missing/out.png"], 3, &["missing/out.png: cannot create"]);
 }
@@ -347,6 +353,11 @@ fn outputs_that_cannot_be_written_exit_3_before_rendering() {
 #[test]
 fn bad_option_values_exit_1() {
     check(&["render", "ok.json", "-o", "out.exr", "--threads", "0"], 1, &["--threads must be at least 1"]);
+    check(
+        &["render", "ok.json", "-o", "out.exr", "--threads", "100000"],
+        1,
+        &["--threads must be at most 1024, got 100000"],
+    );
     check(
         &["render", "ok.json", "-o", "out.exr", "--width", "0"],
         1,

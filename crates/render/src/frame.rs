@@ -73,6 +73,9 @@ pub struct Options {
 /// and the EXR channels are held in memory, about 40 bytes a pixel.
 pub const MAX_PIXELS: u64 = 1 << 28;
 
+/// The most worker threads a render starts.
+pub const MAX_THREADS: usize = 1024;
+
 /// Renders `world` with its camera. `progress` is called once per finished
 /// row (from worker threads).
 pub fn render(world: &World, options: Options, progress: &(dyn Fn() + Sync)) -> Result<(Frame, Stats), Error> {
@@ -98,6 +101,11 @@ pub fn render_until(
     if let Some(n) = options.threads {
         if n == 0 {
             return Err(Error::Options("--threads must be at least 1".into()));
+        }
+        // The pool starts every thread at once; far more than any machine's
+        // cores only exhausts memory and process limits.
+        if n > MAX_THREADS {
+            return Err(Error::Options(format!("--threads must be at most {MAX_THREADS}, got {n}")));
         }
         builder = builder.num_threads(n);
     }

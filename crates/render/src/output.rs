@@ -38,6 +38,12 @@ pub fn check_writable(path: &Path) -> Result<(), Error> {
         let source = std::io::Error::other("is a directory, not a file");
         return Err(Error::Io { path: path.to_path_buf(), source });
     }
+    // Renaming over a device or pipe (`-o /dev/null`) would replace the
+    // special file itself, not write to it.
+    if path.exists() && !path.is_file() {
+        let source = std::io::Error::other("is not a regular file (a device, pipe or socket); only files are replaced");
+        return Err(Error::Io { path: path.to_path_buf(), source });
+    }
     temporary(path).map(drop)
 }
 
@@ -47,7 +53,7 @@ pub(crate) fn write_atomic(
     write: impl FnOnce(&mut BufWriter<&mut File>) -> Result<(), String>,
 ) -> Result<(), Error> {
     let io = |source| Error::Io { path: path.to_path_buf(), source };
-    if path.is_dir() {
+    if path.exists() && !path.is_file() {
         return check_writable(path);
     }
     let mut tmp = temporary(path)?;

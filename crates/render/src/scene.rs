@@ -901,6 +901,23 @@ mod tests {
     }
 
     #[test]
+    fn group_nesting_built_in_code_is_bounded() {
+        // JSON cannot nest this deep (serde_json stops at 128 levels), code can.
+        let mut entry = Entry {
+            objects: Some(vec![ObjectSpec { sphere: Some(SphereSpec::default()), ..Default::default() }]),
+            ..Default::default()
+        };
+        for _ in 0..MAX_GROUP_DEPTH + 5 {
+            entry = Entry { group: Some("g".into()), blocks: Some(vec![entry]), ..Default::default() };
+        }
+        let text = format!(r#"{{ {CAMERA}, "blocks": [] }}"#);
+        let mut scene = SceneFile::from_json(&text).unwrap();
+        scene.blocks = vec![entry];
+        let err = scene.to_world().unwrap_err().to_string();
+        assert!(err.contains("groups nest deeper than 100 levels") && err.starts_with("blocks[0].blocks[0]"), "{err}");
+    }
+
+    #[test]
     fn schema_key_is_allowed() {
         let text =
             format!(r#"{{ "$schema": "x", {CAMERA}, "blocks": [ {{ "objects": [ {{ "sphere": {{}} }} ] }} ] }}"#);
