@@ -110,7 +110,12 @@ fn apply(text: &mut Vec<char>, e: &Edit) {
             }
         }
         Edit::Value(i, v) if !toks.is_empty() => {
-            let (s, e) = toks[i.index(toks.len())];
+            // Prefer values to keys (a token not followed by `:`), so that the
+            // edit reaches the semantic checks rather than the syntax ones.
+            let is_key = |&(_, e): &(usize, usize)| text[e..].iter().find(|c| !c.is_whitespace()) == Some(&':');
+            let values: Vec<_> = toks.iter().copied().filter(|t| !is_key(t)).collect();
+            let pool = if values.is_empty() { &toks } else { &values };
+            let (s, e) = pool[i.index(pool.len())];
             text.splice(s..e, v.chars());
         }
         _ => {}
