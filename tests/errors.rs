@@ -315,7 +315,12 @@ fn deep_nesting_is_refused_without_overflowing_the_stack() {
 #[test]
 fn scene_files_that_cannot_be_read_exit_3() {
     check(&["render", "does-not-exist.json"], 3, &["error: does-not-exist.json: No such file or directory"]);
-    check(&["render", "latin1.json", "-o", "out.exr"], 3, &["latin1.json: stream did not contain valid UTF-8"]);
+    // Readable but not UTF-8: bad input, located like a syntax error.
+    check(
+        &["render", "latin1.json", "-o", "out.exr"],
+        1,
+        &["error: latin1.json: line 1, column 14: the file is not UTF-8 (byte 0xe9)"],
+    );
     check(&["render", "dir.json", "-o", "out.exr"], 3, &["dir.json: Is a directory"]);
     check(&["check", "dir.json"], 3, &["dir.json: Is a directory"]);
 }
