@@ -35,6 +35,8 @@ pub type Triple = [f64; 3];
 /// ```
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
+// The doc comment's example must not end up in the JSON Schema.
+#[schemars(description = "The whole scene document.")]
 pub struct SceneFile {
     /// Optional URL or path of the JSON Schema, for editors. Ignored.
     #[serde(rename = "$schema", default, skip_serializing_if = "Option::is_none")]
