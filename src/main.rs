@@ -104,6 +104,9 @@ fn run(command: Command) -> Result<(), Error> {
     match command {
         Command::Render { scene, output, png, width, height, threads, samples, half, exposure } => {
             let cancel = interrupt_flag();
+            if !exposure.is_finite() {
+                return Err(Error::Options(format!("--exposure must be a finite number of stops, got {exposure}")));
+            }
             let mut world = render::load(&scene)?;
             if let Some(n) = samples {
                 if !(1..=16).contains(&n) {

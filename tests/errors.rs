@@ -371,6 +371,11 @@ fn bad_option_values_exit_1() {
     check(&["render", "ok.json", "-o", "out.exr", "--width", "100000"], 1, &["100000x75000 is too large"]);
     check(&["render", "ok.json", "-o", "out.exr", "--samples", "17"], 1, &["--samples must be between 1 and 16"]);
     check(
+        &["render", "ok.json", "-o", "out.exr", "--png", "p.png", "--exposure", "nan"],
+        1,
+        &["--exposure must be a finite number of stops, got NaN"],
+    );
+    check(
         &["trace", "ok.json", "--origin", "0", "0", "5", "--direction", "0", "0", "0"],
         1,
         &["--origin/--direction: the ray direction is zero"],
