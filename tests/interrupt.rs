@@ -13,10 +13,11 @@ fn sigint_stops_the_render_and_writes_nothing() {
     std::fs::write(d.join("out.exr"), b"an earlier render").unwrap();
     std::fs::write(d.join("out.png"), b"an earlier preview").unwrap();
     let before: Vec<_> = std::fs::read_dir(d).unwrap().map(|e| e.unwrap().file_name()).collect();
-    // Hundreds of millions of rays: minutes of work, so the signal arrives mid-render.
+    // Tens of millions of rays: far more than a second of work, so the signal
+    // arrives mid-render; rows stay short, so it stops soon after.
     let glass = scene("glass.json");
     let args =
-        ["render", glass.to_str().unwrap(), "-o", "out.exr", "--png", "out.png", "--width", "4000", "--samples", "8"];
+        ["render", glass.to_str().unwrap(), "-o", "out.exr", "--png", "out.png", "--width", "4000", "--samples", "2"];
     let child =
         Command::new(env!("CARGO_BIN_EXE_komplex")).args(args).current_dir(d).stderr(Stdio::piped()).spawn().unwrap();
     // Long enough for the handler to be installed (the first thing `render` does).
@@ -31,4 +32,30 @@ fn sigint_stops_the_render_and_writes_nothing() {
     assert_eq!(std::fs::read(d.join("out.png")).unwrap(), b"an earlier preview");
     let after: Vec<_> = std::fs::read_dir(d).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(before.len(), after.len(), "stray files: {after:?}");
+}
+
+#[test]
+fn a_set_flag_stops_the_render_loop() {
+    use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+    let world = crate::support::world(&scene("csg.json"), Some((16, 200)));
+    let run = |flag: &AtomicBool, rows: &AtomicU32| {
+        render::frame::render_until(
+            &world,
+            render::frame::Options { threads: Some(2) },
+            &|| {
+                // Ctrl-C arrives once the third row is done.
+                if rows.fetch_add(1, Ordering::SeqCst) == 2 {
+                    flag.store(true, Ordering::SeqCst);
+                }
+            },
+            flag,
+        )
+    };
+    let (flag, rows) = (AtomicBool::new(false), AtomicU32::new(0));
+    assert!(matches!(run(&flag, &rows), Err(render::Error::Interrupted)));
+    // Workers check the flag before each row: at most one more row per thread.
+    assert!(rows.load(Ordering::SeqCst) <= 5, "{} rows rendered after the flag", rows.load(Ordering::SeqCst));
+    // Without the flag the same loop finishes.
+    let (flag, rows) = (AtomicBool::new(false), AtomicU32::new(1000));
+    assert_eq!(run(&flag, &rows).unwrap().0.pixels.len(), 16 * 200);
 }
