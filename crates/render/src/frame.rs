@@ -70,7 +70,7 @@ pub struct Options {
 }
 
 /// The largest image rendered (2^28 pixels, about 16k × 16k): the frame
-/// and the EXR channels are held in memory, about 40 bytes a pixel.
+/// (40 bytes a pixel) and the EXR channels (40 more) are held in memory.
 pub const MAX_PIXELS: u64 = 1 << 28;
 
 /// The most worker threads a render starts.
@@ -111,26 +111,31 @@ pub fn render_until(
     }
     let pool = builder.build().map_err(|e| Error::Options(format!("cannot start worker threads: {e}")))?;
     let start = Instant::now();
-    let (rows, rays): (Vec<Vec<Pixel>>, Vec<u64>) = pool.install(|| {
-        (0..world.camera.height())
-            .into_par_iter()
-            .map(|i| {
+    // Rows are written in place: the frame is the only full-size buffer
+    // (a collected list of rows would double the peak memory).
+    let width = world.camera.width() as usize;
+    let mut pixels = vec![Pixel::default(); width * world.camera.height() as usize];
+    let rays: u64 = pool.install(|| {
+        pixels
+            .par_chunks_mut(width)
+            .enumerate()
+            .map(|(i, out)| {
                 if cancel.load(Ordering::Relaxed) {
-                    return (Vec::new(), 0);
+                    return 0;
                 }
-                let row = render_row(world, i);
+                let (row, rays) = render_row(world, i as u32);
+                out.copy_from_slice(&row);
                 progress();
-                row
+                rays
             })
-            .unzip()
+            .sum()
     });
     let elapsed = start.elapsed();
     if cancel.load(Ordering::Relaxed) {
         return Err(Error::Interrupted);
     }
-    let pixels = rows.into_iter().flatten().collect();
     let frame = Frame { width: world.camera.width(), height: world.camera.height(), pixels };
-    Ok((frame, Stats { rays: rays.iter().sum(), elapsed }))
+    Ok((frame, Stats { rays, elapsed }))
 }
 
 fn render_row(world: &World, i: u32) -> (Vec<Pixel>, u64) {
