@@ -149,12 +149,13 @@ fn run(command: Command) -> Result<(), Error> {
             if let Some(b) = &bar {
                 b.finish_and_clear();
             }
-            let color = if half { ColorType::F16 } else { ColorType::F32 };
-            render::exr::write_exr(&frame, &output, color)?;
-            // The EXR is complete and in place; a Ctrl-C now only skips the preview.
+            // A Ctrl-C from here on lets the (short) writing finish, so the
+            // files on disk are both old or both new.
             if cancel.load(Ordering::Relaxed) {
                 return Err(Error::Interrupted);
             }
+            let color = if half { ColorType::F16 } else { ColorType::F32 };
+            render::exr::write_exr(&frame, &output, color)?;
             if let Some(p) = &png {
                 render::png::write_png(&frame, p, exposure)?;
             }
