@@ -6,6 +6,8 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 use clap::{Parser, Subcommand};
 use render::exr::ColorType;
@@ -15,6 +17,8 @@ use render::Error;
 const EXIT_INPUT: u8 = 1;
 /// Exit status for I/O and encoding failures.
 const EXIT_IO: u8 = 3;
+/// Exit status after Ctrl-C (SIGINT) or SIGTERM: 128 + SIGINT, as shells report it.
+const EXIT_INTERRUPTED: u8 = 130;
 
 #[derive(Parser)]
 #[command(name = "komplex", version, about = "Quadric-CSG ray caster: a JSON scene becomes an OpenEXR image")]
@@ -83,7 +87,11 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::from(if e.is_input_error() { EXIT_INPUT } else { EXIT_IO })
+            ExitCode::from(match e {
+                Error::Interrupted => EXIT_INTERRUPTED,
+                e if e.is_input_error() => EXIT_INPUT,
+                _ => EXIT_IO,
+            })
         }
     }
 }
@@ -95,6 +103,10 @@ fn triple(v: &[f64]) -> [f64; 3] {
 fn run(command: Command) -> Result<(), Error> {
     match command {
         Command::Render { scene, output, png, width, height, threads, samples, half, exposure } => {
+            let cancel = interrupt_flag();
+            if !exposure.is_finite() {
+                return Err(Error::Options(format!("--exposure must be a finite number of stops, got {exposure}")));
+            }
             let mut world = render::load(&scene)?;
             if let Some(n) = samples {
                 if !(1..=16).contains(&n) {
@@ -114,6 +126,11 @@ fn run(command: Command) -> Result<(), Error> {
                 world.camera = cam.with_size(w, h).map_err(|e| Error::Options(format!("--width/--height: {e}")))?;
             }
             let output = output.unwrap_or_else(|| default_output(&scene));
+            // Fail before the render, not after it, if an output cannot be written.
+            render::check_writable(&output)?;
+            if let Some(p) = &png {
+                render::check_writable(p)?;
+            }
             let rows = u64::from(world.camera.height());
             let bar = std::io::stderr().is_terminal().then(|| {
                 let bar = indicatif::ProgressBar::new(rows);
@@ -127,9 +144,15 @@ fn run(command: Command) -> Result<(), Error> {
                     b.inc(1);
                 }
             };
-            let (frame, stats) = render::frame::render(&world, render::frame::Options { threads }, &tick)?;
+            let (frame, stats) =
+                render::frame::render_until(&world, render::frame::Options { threads }, &tick, &cancel)?;
             if let Some(b) = &bar {
                 b.finish_and_clear();
+            }
+            // A Ctrl-C from here on lets the (short) writing finish, so the
+            // files on disk are both old or both new.
+            if cancel.load(Ordering::Relaxed) {
+                return Err(Error::Interrupted);
             }
             let color = if half { ColorType::F16 } else { ColorType::F32 };
             render::exr::write_exr(&frame, &output, color)?;
@@ -168,6 +191,22 @@ fn run(command: Command) -> Result<(), Error> {
             Ok(())
         }
     }
+}
+
+/// A flag set by the first Ctrl-C (SIGINT) or SIGTERM; the render loop
+/// stops, every temporary file is removed as it drops, and nothing is
+/// renamed into place. A second signal exits at once with status 130 (an
+/// image being encoded at that moment may leave its `.komplex-*.tmp` file).
+fn interrupt_flag() -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        // Registration fails only for forbidden signals; these two are not.
+        // Conditional shutdown first: it sees the flag as the previous signal left it.
+        let _ =
+            signal_hook::flag::register_conditional_shutdown(signal, i32::from(EXIT_INTERRUPTED), Arc::clone(&flag));
+        let _ = signal_hook::flag::register(signal, Arc::clone(&flag));
+    }
+    flag
 }
 
 /// The scene's stem with `.exr`, in the current directory.

@@ -6,7 +6,10 @@ mod support;
 
 mod camera;
 mod cli;
+mod determinism;
 mod errors;
 mod exr_output;
+mod interrupt;
+mod mutations;
 mod shading;
 mod trace;

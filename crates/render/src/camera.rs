@@ -18,6 +18,9 @@ pub enum CameraError {
     /// Width or height is zero.
     #[error("the image size {0}x{1} is empty")]
     EmptyImage(u32, u32),
+    /// More pixels than [`crate::frame::MAX_PIXELS`]; refused before anything is allocated.
+    #[error("the image size {0}x{1} is too large: at most {max} pixels (about 16k x 16k) are supported", max = crate::frame::MAX_PIXELS)]
+    TooLarge(u32, u32),
     /// The opening angle is outside (0°, 180°).
     #[error("the aperture must lie strictly between 0 and 180 degrees, got {0}")]
     BadAperture(f64),
@@ -60,6 +63,9 @@ impl Camera {
     ) -> Result<Self, CameraError> {
         if width == 0 || height == 0 {
             return Err(CameraError::EmptyImage(width, height));
+        }
+        if u64::from(width) * u64::from(height) > crate::frame::MAX_PIXELS {
+            return Err(CameraError::TooLarge(width, height));
         }
         if !(aperture_degrees > 0.0 && aperture_degrees < 180.0) {
             return Err(CameraError::BadAperture(aperture_degrees));

@@ -74,7 +74,7 @@ impl SceneError {
         // serde_path_to_error writes `?` for a place it could not name
         // (inside a syntax error); the line and column still say where.
         let path = e.path().to_string();
-        let path = path.trim_end_matches('?').trim_end_matches('.').to_string();
+        let path = abbreviated(path.trim_end_matches('?').trim_end_matches('.'));
         let inner = e.inner();
         let (line, column) = (inner.line(), inner.column());
         let raw = inner.to_string();
@@ -83,12 +83,28 @@ impl SceneError {
             Some(i) => raw[..i].to_string(),
             None => raw,
         };
+        let message = if message == "recursion limit exceeded" {
+            "nested too deeply: at most 128 levels of brackets (about 60 nested groups) are supported".to_string()
+        } else {
+            message
+        };
         let message = with_suggestion(message).replace(
             "data did not match any variant of untagged enum Scale",
             "`scale` takes a number or an array [sx, sy, sz]",
         );
         SceneError::Parse { path, line, column, message }
     }
+}
+
+/// A JSON path short enough to read: a path more than 12 steps deep (only
+/// deeply nested groups get there) keeps its first and last 4 steps.
+fn abbreviated(path: &str) -> String {
+    let steps: Vec<&str> = path.split('.').collect();
+    if steps.len() <= 12 {
+        return path.to_string();
+    }
+    let n = steps.len();
+    format!("{}.(… {} more levels …).{}", steps[..4].join("."), n - 8, steps[n - 4..].join("."))
 }
 
 /// Adds "did you mean" to serde's unknown field/variant messages.
@@ -166,6 +182,9 @@ pub enum Error {
     /// Bad options (image size, thread count, ray).
     #[error("{0}")]
     Options(String),
+    /// The render was cancelled (Ctrl-C) before it finished.
+    #[error("interrupted; no output was written")]
+    Interrupted,
 }
 
 impl Error {

@@ -1,5 +1,6 @@
 //! The render loop: one ray per pixel centre, rows in parallel.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use quadric::nalgebra::Vector3;
@@ -69,12 +70,27 @@ pub struct Options {
 }
 
 /// The largest image rendered (2^28 pixels, about 16k × 16k): the frame
-/// and the EXR channels are held in memory, about 40 bytes a pixel.
+/// (40 bytes a pixel) and the EXR channels (40 more) are held in memory.
 pub const MAX_PIXELS: u64 = 1 << 28;
+
+/// The most worker threads a render starts.
+pub const MAX_THREADS: usize = 1024;
 
 /// Renders `world` with its camera. `progress` is called once per finished
 /// row (from worker threads).
 pub fn render(world: &World, options: Options, progress: &(dyn Fn() + Sync)) -> Result<(Frame, Stats), Error> {
+    render_until(world, options, progress, &AtomicBool::new(false))
+}
+
+/// [`render`], stopping early with [`Error::Interrupted`] once `cancel` is
+/// set (e.g. by a Ctrl-C handler). Workers look at the flag before each row,
+/// so the render stops within about one row's time per thread.
+pub fn render_until(
+    world: &World,
+    options: Options,
+    progress: &(dyn Fn() + Sync),
+    cancel: &AtomicBool,
+) -> Result<(Frame, Stats), Error> {
     let pixels = u64::from(world.camera.width()) * u64::from(world.camera.height());
     if pixels > MAX_PIXELS {
         return Err(Error::Options(format!(
@@ -86,24 +102,40 @@ pub fn render(world: &World, options: Options, progress: &(dyn Fn() + Sync)) -> 
         if n == 0 {
             return Err(Error::Options("--threads must be at least 1".into()));
         }
+        // The pool starts every thread at once; far more than any machine's
+        // cores only exhausts memory and process limits.
+        if n > MAX_THREADS {
+            return Err(Error::Options(format!("--threads must be at most {MAX_THREADS}, got {n}")));
+        }
         builder = builder.num_threads(n);
     }
     let pool = builder.build().map_err(|e| Error::Options(format!("cannot start worker threads: {e}")))?;
     let start = Instant::now();
-    let (rows, rays): (Vec<Vec<Pixel>>, Vec<u64>) = pool.install(|| {
-        (0..world.camera.height())
-            .into_par_iter()
-            .map(|i| {
-                let row = render_row(world, i);
+    // Rows are written in place: the frame is the only full-size buffer
+    // (a collected list of rows would double the peak memory).
+    let width = world.camera.width() as usize;
+    let mut pixels = vec![Pixel::default(); width * world.camera.height() as usize];
+    let rays: u64 = pool.install(|| {
+        pixels
+            .par_chunks_mut(width)
+            .enumerate()
+            .map(|(i, out)| {
+                if cancel.load(Ordering::Relaxed) {
+                    return 0;
+                }
+                let (row, rays) = render_row(world, i as u32);
+                out.copy_from_slice(&row);
                 progress();
-                row
+                rays
             })
-            .unzip()
+            .sum()
     });
     let elapsed = start.elapsed();
-    let pixels = rows.into_iter().flatten().collect();
+    if cancel.load(Ordering::Relaxed) {
+        return Err(Error::Interrupted);
+    }
     let frame = Frame { width: world.camera.width(), height: world.camera.height(), pixels };
-    Ok((frame, Stats { rays: rays.iter().sum(), elapsed }))
+    Ok((frame, Stats { rays, elapsed }))
 }
 
 fn render_row(world: &World, i: u32) -> (Vec<Pixel>, u64) {

@@ -35,11 +35,23 @@ pub mod trace;
 use std::path::Path;
 
 pub use error::{nearest, Error, SceneError};
+pub use output::check_writable;
 
 /// Reads and converts a scene file.
 pub fn load(path: &Path) -> Result<scene::World, Error> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
-    scene::SceneFile::load_str(&text).map_err(|source| Error::Scene { file: path.to_path_buf(), source })
+    let bytes = std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let scene_error = |source| Error::Scene { file: path.to_path_buf(), source };
+    // Bad encoding is bad input (exit 1), located like a syntax error.
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let valid = std::str::from_utf8(valid).unwrap_or_default();
+        let line = valid.matches('\n').count() + 1;
+        let column = valid.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        let byte = e.as_bytes()[e.utf8_error().valid_up_to()];
+        let message = format!("the file is not UTF-8 (byte 0x{byte:02x})");
+        scene_error(SceneError::Parse { path: String::new(), line, column, message })
+    })?;
+    scene::SceneFile::load_str(&text).map_err(scene_error)
 }
 
 /// The JSON Schema (draft-07) of the scene format, pretty-printed.

@@ -8,17 +8,55 @@ use std::path::Path;
 
 use crate::Error;
 
+/// The directory a file at `path` goes into.
+fn directory(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
+/// A temporary file beside `path`. Errors name `path` and the directory,
+/// without the temporary file's random name.
+fn temporary(path: &Path) -> Result<tempfile::NamedTempFile, Error> {
+    let dir = directory(path);
+    tempfile::Builder::new().prefix(".komplex-").suffix(".tmp").tempfile_in(dir).map_err(|e| {
+        // tempfile appends ` at path "<random temporary name>"`, which means nothing to the user.
+        let text = e.to_string();
+        let cause = text.rfind(" at path ").map_or(text.as_str(), |i| &text[..i]);
+        let source =
+            std::io::Error::new(e.kind(), format!("cannot create a file in directory {}: {cause}", dir.display()));
+        Error::Io { path: path.to_path_buf(), source }
+    })
+}
+
+/// Checks, before a long render, that `path` can be written: it is not a
+/// directory and a file can be created beside it (the probe is removed at
+/// once). A failure here costs nothing; after the render it would waste it.
+pub fn check_writable(path: &Path) -> Result<(), Error> {
+    if path.is_dir() {
+        let source = std::io::Error::other("is a directory, not a file");
+        return Err(Error::Io { path: path.to_path_buf(), source });
+    }
+    // Renaming over a device or pipe (`-o /dev/null`) would replace the
+    // special file itself, not write to it.
+    if path.exists() && !path.is_file() {
+        let source = std::io::Error::other("is not a regular file (a device, pipe or socket); only files are replaced");
+        return Err(Error::Io { path: path.to_path_buf(), source });
+    }
+    temporary(path).map(drop)
+}
+
 /// Writes `path` through `write`, atomically.
 pub(crate) fn write_atomic(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<&mut File>) -> Result<(), String>,
 ) -> Result<(), Error> {
     let io = |source| Error::Io { path: path.to_path_buf(), source };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::Builder::new().prefix(".komplex-").suffix(".tmp").tempfile_in(dir).map_err(io)?;
+    if path.exists() && !path.is_file() {
+        return check_writable(path);
+    }
+    let mut tmp = temporary(path)?;
     {
         let mut buffered = BufWriter::new(tmp.as_file_mut());
         write(&mut buffered).map_err(|message| Error::Encode { path: path.to_path_buf(), message })?;

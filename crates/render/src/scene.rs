@@ -35,6 +35,7 @@ pub type Triple = [f64; 3];
 /// ```
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
+// The doc comment's example must not end up in the JSON Schema.
 #[schemars(description = "The whole scene document.")]
 pub struct SceneFile {
     /// Optional URL or path of the JSON Schema, for editors. Ignored.
@@ -428,6 +429,15 @@ impl World {
     }
 }
 
+/// The deepest nesting of groups. JSON files cannot get near it (serde_json
+/// stops at 128 levels of brackets, about 60 groups) but a `SceneFile` built
+/// in code could, and flattening recurses once per level.
+pub const MAX_GROUP_DEPTH: usize = 100;
+
+/// The largest `settings.max_depth`: shading recurses once per bounce, so an
+/// unbounded depth could overflow a worker thread's stack.
+pub const MAX_BOUNCES: u32 = 64;
+
 fn vec3(t: Triple) -> Vector3<f64> {
     Vector3::new(t[0], t[1], t[2])
 }
@@ -438,6 +448,16 @@ fn finite_triple(t: &Triple, place: &str, what: &str) -> Result<(), SceneError> 
     } else {
         Err(SceneError::semantic(place, format!("{what} must be finite")))
     }
+}
+
+/// A colour or reflectance: finite and not negative (negative light or
+/// reflectance has no physical meaning and would subtract light).
+fn colour(t: &Triple, place: &str, what: &str) -> Result<(), SceneError> {
+    finite_triple(t, place, what)?;
+    if t.iter().any(|c| *c < 0.0) {
+        return Err(SceneError::semantic(place, format!("{what} must not be negative, got {t:?}")));
+    }
+    Ok(())
 }
 
 /// Composes a list of steps, the first acting first.
@@ -486,8 +506,14 @@ impl SceneFile {
                 .map_err(|e| SceneError::semantic("camera", e.to_string()))?;
 
         let s = &self.settings;
-        finite_triple(&s.ambient, "settings.ambient", "the ambient light")?;
-        finite_triple(&s.background, "settings.background", "the background")?;
+        colour(&s.ambient, "settings.ambient", "the ambient light")?;
+        colour(&s.background, "settings.background", "the background")?;
+        if s.max_depth > MAX_BOUNCES {
+            return Err(SceneError::semantic(
+                "settings.max_depth",
+                format!("must be at most {MAX_BOUNCES}, got {}", s.max_depth),
+            ));
+        }
         if let Some(e) = s.epsilon {
             if !(e.is_finite() && e >= 0.0) {
                 return Err(SceneError::semantic("settings.epsilon", format!("must be finite and >= 0, got {e}")));
@@ -508,8 +534,8 @@ impl SceneFile {
             let base = l.color.unwrap_or([1.0; 3]);
             let diffuse = l.diffuse.unwrap_or(base);
             let specular = l.specular.unwrap_or(base);
-            finite_triple(&diffuse, &place, "the colour")?;
-            finite_triple(&specular, &place, "the colour")?;
+            colour(&diffuse, &place, "the colour")?;
+            colour(&specular, &place, "the colour")?;
             lights.push(Light {
                 position: Point3::from(vec3(l.position)),
                 diffuse: vec3(diffuse),
@@ -527,13 +553,15 @@ impl SceneFile {
                 (&m.reflect, "reflect"),
                 (&m.transmit, "transmit"),
             ] {
-                finite_triple(t, &place, what)?;
+                colour(t, &format!("{place}.{what}"), what)?;
             }
             if !(m.shininess.is_finite() && m.shininess >= 0.0) {
-                return Err(SceneError::semantic(&place, "shininess must be finite and >= 0"));
+                let msg = format!("shininess must be finite and >= 0, got {}", m.shininess);
+                return Err(SceneError::semantic(&format!("{place}.shininess"), msg));
             }
             if !(m.ior.is_finite() && m.ior > 0.0) {
-                return Err(SceneError::semantic(&place, "ior must be finite and > 0"));
+                let msg = format!("ior must be finite and > 0, got {}", m.ior);
+                return Err(SceneError::semantic(&format!("{place}.ior"), msg));
             }
             materials.push(Material {
                 name: name.clone(),
@@ -592,6 +620,9 @@ impl Flattener<'_> {
 
     /// `outer`: the enclosing groups' transforms, innermost first.
     fn entries(&mut self, entries: &[Entry], place: &str, outer: &[Transform]) -> Result<(), SceneError> {
+        if outer.len() > MAX_GROUP_DEPTH {
+            return Err(SceneError::semantic(place, format!("groups nest deeper than {MAX_GROUP_DEPTH} levels")));
+        }
         for (i, e) in entries.iter().enumerate() {
             let here = format!("{place}[{i}]");
             let own = transform_of(&e.transform, &here)?;
@@ -664,6 +695,15 @@ impl Flattener<'_> {
             let solid = solid_of(o, &at).map_err(|err| err.with_owner(&who))?;
             let m = transform_of(&o.transform, &at).map_err(|err| err.with_owner(&who))?;
             let solid = solid.transformed(&m.then(&placement));
+            let finite = match &solid {
+                Solid::Quadric(q) => q.is_finite(),
+                Solid::HalfSpace(h) => h.is_finite(),
+            };
+            if !finite {
+                let msg = "the transforms (the object's, the block's and its groups') overflow: \
+                           the placed solid has coefficients that are not finite";
+                return Err(SceneError::semantic(&at, format!("{who}: {msg}")));
+            }
             solids.push(if o.complement { solid.complement() } else { solid });
             solid_materials.push(match &o.material {
                 Some(mat) => self.material(mat, &format!("{at}.material"), &who)?,
@@ -860,6 +900,23 @@ mod tests {
         let w = SceneFile::from_json(&text).unwrap().to_world().unwrap();
         assert_eq!(w.lights[0].diffuse, Vector3::repeat(0.5));
         assert_eq!(w.lights[0].specular, Vector3::new(1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn group_nesting_built_in_code_is_bounded() {
+        // JSON cannot nest this deep (serde_json stops at 128 levels), code can.
+        let mut entry = Entry {
+            objects: Some(vec![ObjectSpec { sphere: Some(SphereSpec::default()), ..Default::default() }]),
+            ..Default::default()
+        };
+        for _ in 0..MAX_GROUP_DEPTH + 5 {
+            entry = Entry { group: Some("g".into()), blocks: Some(vec![entry]), ..Default::default() };
+        }
+        let text = format!(r#"{{ {CAMERA}, "blocks": [] }}"#);
+        let mut scene = SceneFile::from_json(&text).unwrap();
+        scene.blocks = vec![entry];
+        let err = scene.to_world().unwrap_err().to_string();
+        assert!(err.contains("groups nest deeper than 100 levels") && err.starts_with("blocks[0].blocks[0]"), "{err}");
     }
 
     #[test]

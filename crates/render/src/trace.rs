@@ -67,7 +67,7 @@ fn finite(x: f64) -> Option<f64> {
 /// Traces one ray from `origin` along `direction` (normalised).
 pub fn trace(world: &World, origin: [f64; 3], direction: [f64; 3]) -> Result<TraceReport, Error> {
     let ray = Ray::new(Point3::from(Vector3::from(origin)), Vector3::from(direction))
-        .map_err(|e| Error::Options(format!("bad ray: {e}")))?;
+        .map_err(|e| Error::Options(format!("--origin/--direction: {e}")))?;
     let complex = &world.complex;
     let blocks = complex
         .blocks()
