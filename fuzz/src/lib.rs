@@ -697,4 +697,33 @@ pub mod bound {
         };
         g.is_finite().then_some(g)
     }
+
+    /// `Σ |A_ij|`: how fast the gradient itself can change (0 for a half-space).
+    pub fn curvature(s: &Solid) -> f64 {
+        match s {
+            Solid::Quadric(q) => q.quadratic_part().abs().sum(),
+            Solid::HalfSpace(_) => 0.0,
+        }
+    }
+
+    /// Whether `x` is zero or of moderate size (`1e-100 <= |x| <= 1e100`).
+    pub fn moderate(x: f64) -> bool {
+        x == 0.0 || (1e-100..=1e100).contains(&x.abs())
+    }
+
+    /// Whether every stored coefficient and the centre are [`moderate`]: the
+    /// range where accuracy is promised. (Beyond it, subnormal products lose
+    /// bits and squares overflow; only "no panic, no NaN" holds there.)
+    pub fn moderate_solid(s: &Solid) -> bool {
+        match s {
+            Solid::Quadric(q) => {
+                let (c, a, w, k) = q.local_parts();
+                c.iter().chain(a.iter()).chain(w.iter()).all(|x| moderate(*x)) && moderate(k)
+            }
+            Solid::HalfSpace(h) => {
+                let v = h.vector();
+                h.reference_point().iter().chain(h.normal_vector().iter()).all(|x| moderate(*x)) && moderate(v.w)
+            }
+        }
+    }
 }

@@ -1,0 +1,48 @@
+//! Minimised inputs from the `complex_queries` fuzz target (`fuzz/`), one
+//! test each: the shape of the input that failed and the law it broke.
+
+use complex::BlockId;
+use quadric::nalgebra::Point3;
+use quadric::{Quadric, Solid, Transform};
+
+use crate::common::*;
+
+/// The tube `x² + y² <= 1` along z, moved `shift` along its own axis (which
+/// changes nothing but its stored centre) and tilted about x by `degrees`.
+/// Tilted, it is unbounded in y, however small the tilt: it passes the
+/// origin, while its centre sits `shift · sin(tilt)` away in y.
+fn far_tilted_tube(shift: f64, degrees: f64) -> Vec<Solid> {
+    let m = translate(0.0, 0.0, shift).then(&Transform::rotate_x_degrees(degrees).expect("finite"));
+    vec![Solid::from(Quadric::tube_z().transformed(&m))]
+}
+
+/// The block box must hold every point of the block: an eigenvector solver
+/// returned the tube's axis as exactly z (the tilt, far below its tolerance,
+/// was lost), so the box was bounded in y around the far centre and the BVH
+/// path missed the tube at the origin.
+#[test]
+fn tilted_tube_is_unbounded_across_its_axis() {
+    for (shift, degrees) in [(1e20, 1e-14), (-1e300, 4.667261458384588e-62), (1e12, 1e-7)] {
+        let c = complex(vec![block("tube", far_tilted_tube(shift, degrees), O, 0)]);
+        let origin = Point3::origin();
+        assert!(c.block(BlockId(0)).contains_point(&origin), "the tube passes the origin");
+        assert!(c.block_aabb(BlockId(0)).contains_point(&origin), "box {:?}", c.block_aabb(BlockId(0)));
+        assert_eq!(c.contains_point(&origin), Some(BlockId(0)));
+        let r = ray([-5.0, 0.0, 0.0], [1.0, 0.0, 0.0]);
+        let brute = c.block_intervals(BlockId(0), &r);
+        assert!(!brute.is_empty(), "the ray crosses the tube at the origin");
+        assert_eq!(c.intervals(&r), vec![(BlockId(0), brute)], "the BVH path must see the tube");
+        assert_eq!(c.cast_ray(&r, f64::INFINITY).map(|h| h.t), Some(brute.as_slice()[0].enter.t));
+    }
+}
+
+/// An untilted tube far along its axis keeps its tight cross-section box.
+#[test]
+fn straight_far_tube_stays_bounded_across_its_axis() {
+    let c = complex(vec![block("tube", far_tilted_tube(1e20, 0.0), O, 0)]);
+    let b = c.block_aabb(BlockId(0));
+    for i in 0..2 {
+        assert!(b.min[i] >= -1.0 - 1e-6 && b.max[i] <= 1.0 + 1e-6, "{b:?}");
+    }
+    assert!(b.min[2] == f64::NEG_INFINITY && b.max[2] == f64::INFINITY, "{b:?}");
+}
