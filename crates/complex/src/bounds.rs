@@ -290,9 +290,14 @@ fn core(q: &quadric::Quadric) -> Option<Core> {
         if w.dot(&axis).abs() > 1e-9 * w.norm() {
             return None; // a parabolic cylinder: left to propagation
         }
-        // A slightly negative l0 (rounding) makes a very slender hyperboloid:
-        // keep its spread so the box stays conservative.
-        (-(p * w), (-l0).max(0.0))
+        // A slightly negative eigenvalue makes a very slender hyperboloid:
+        // keep its spread so the box stays conservative. The computed `l0`
+        // is off by up to the solver's error, about ε·top (exact for a
+        // diagonal `A`), which can hide a true eigenvalue of either sign:
+        // the spread covers the most negative one it may be.
+        let diagonal = a[(0, 1)] == 0.0 && a[(0, 2)] == 0.0 && a[(1, 2)] == 0.0;
+        let noise = if diagonal { 0.0 } else { 64.0 * f64::EPSILON * top };
+        (-(p * w), (noise - l0).max(0.0))
     } else {
         // One negative direction: a cone or a hyperboloid around the axis.
         (-(p * w) - axis * (axis.dot(&w) / l0), -l0)

@@ -46,3 +46,34 @@ fn straight_far_tube_stays_bounded_across_its_axis() {
     }
     assert!(b.min[2] == f64::NEG_INFINITY && b.max[2] == f64::INFINITY, "{b:?}");
 }
+
+/// `3.0e45·y² + 4.0e45·z² + 2·2.5e22·xy + 2·7.8e20·xz + 55 <= 0` (no x² term):
+/// for fixed `y < 0` it holds for all large enough `x`, so the solid is
+/// non-empty and unbounded. Its `A` has one eigenvalue of about -0.1 next to
+/// 8e45, far below the eigen solver's rounding (about 1e30): computed as
+/// positive, it made the quadric an "empty cylinder" and the box empty.
+#[test]
+fn eigenvalue_lost_in_rounding_keeps_the_box_conservative() {
+    let c = [
+        0.0,
+        5.912640821733636e45,
+        7.945111104204573e45,
+        2.4635712928565464e22,
+        7.8198990349039e20,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        55.0,
+    ];
+    let q = Quadric::from_coefficients(c).expect("finite");
+    let c = complex(vec![block("sliver", vec![Solid::from(q)], O, 0)]);
+    let p = Point3::new(5e23, -3.984375, 0.0);
+    assert!(c.block(BlockId(0)).contains_point(&p), "a point of the solid");
+    assert!(c.block_aabb(BlockId(0)).contains_point(&p), "box {:?}", c.block_aabb(BlockId(0)));
+    assert_eq!(c.contains_point(&p), Some(BlockId(0)));
+    let r = ray([0.0, -3.984375, 0.0], [1.0, 0.0, 0.0]);
+    let brute = c.block_intervals(BlockId(0), &r);
+    assert!(!brute.is_empty());
+    assert_eq!(c.intervals(&r), vec![(BlockId(0), brute)]);
+}
