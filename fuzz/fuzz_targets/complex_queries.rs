@@ -62,7 +62,8 @@ fn owner_of_point(c: &Complex, p: &Point3<f64>) -> Option<BlockId> {
 
 fn check_point(c: &Complex, p: &Point3<f64>, accurate: bool) {
     let owner = c.contains_point(p);
-    if !accurate {
+    // (Far from the origin or among subnormals, `f` itself over- or underflows.)
+    if !(accurate && p.iter().all(|x| bound::moderate(*x))) {
         return;
     }
     assert_eq!(owner, owner_of_point(c, p), "contains_point({p:?})");

@@ -33,7 +33,10 @@ fn tolerance(s: &Solid, ray: &Ray, t: f64) -> Option<f64> {
     // How far the rounded point may be from the exact one.
     // (With absolute floors: relative bounds fail among subnormals.)
     let tiny = f64::from_bits(1);
-    let h = ULPS * (f64::EPSILON * (ray.origin().coords.amax() + t.abs()) + tiny);
+    // The kernel's accuracy is stated relative to the distances involved,
+    // including the one from the solid's centre (where it re-bases the ray).
+    let from_centre = (ray.origin() - bound::centre(s)).amax();
+    let h = ULPS * (f64::EPSILON * (ray.origin().coords.amax() + t.abs() + from_centre) + tiny);
     let tol = ULPS * (f64::EPSILON * m + f64::MIN_POSITIVE) + g * h + bound::curvature(s) * h * h;
     tol.is_finite().then_some(tol)
 }

@@ -674,8 +674,12 @@ pub mod bound {
         let m = match s {
             Solid::Quadric(q) => {
                 let (c, a, w, k) = q.local_parts();
+                // Every entry of `A` carries an absolute rounding error of
+                // about ε·max|A| (from the transforms that built it), so the
+                // scale is max|A|·|d|², not Σ|aᵢⱼ dᵢ dⱼ|: a rotated tube's
+                // zero entries are ±1e-17, which is 10 at 1e9 along the axis.
                 let d = (x - c).abs();
-                d.dot(&(a.abs() * d)) + 2.0 * w.abs().dot(&d) + k.abs()
+                a.amax() * d.sum() * d.sum() + 2.0 * w.abs().dot(&d) + k.abs()
             }
             Solid::HalfSpace(h) => {
                 let v = h.vector();
@@ -706,9 +710,10 @@ pub mod bound {
         }
     }
 
-    /// Whether `x` is zero or of moderate size (`1e-100 <= |x| <= 1e100`).
+    /// Whether `x` is zero or of moderate size (`1e-80 <= |x| <= 1e80`):
+    /// then products of three such numbers neither overflow nor underflow.
     pub fn moderate(x: f64) -> bool {
-        x == 0.0 || (1e-100..=1e100).contains(&x.abs())
+        x == 0.0 || (1e-80..=1e80).contains(&x.abs())
     }
 
     /// Whether every stored coefficient and the centre are [`moderate`]: the
@@ -724,6 +729,14 @@ pub mod bound {
                 let v = h.vector();
                 h.reference_point().iter().chain(h.normal_vector().iter()).all(|x| moderate(*x)) && moderate(v.w)
             }
+        }
+    }
+
+    /// The point the solid's coefficients are taken around.
+    pub fn centre(s: &Solid) -> Point3<f64> {
+        match s {
+            Solid::Quadric(q) => q.centre(),
+            Solid::HalfSpace(h) => h.reference_point(),
         }
     }
 }
