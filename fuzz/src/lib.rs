@@ -458,6 +458,24 @@ impl Wire for SolidSpec {
 }
 
 impl SolidSpec {
+    /// Whether every number of the input is [`bound::moderate`]: the inputs
+    /// for which accuracy is checked (a coefficient of 1e-320 has a few
+    /// significant bits, and the kernel may rescale it to look moderate).
+    pub fn moderate(&self) -> bool {
+        let ok = |v: &[Num]| v.iter().all(|x| bound::moderate(x.value()));
+        let base = match &self.base {
+            Base::Elementary(_) => true,
+            Base::Coefficients(c) => ok(c),
+            Base::Matrix(m) => ok(m),
+            Base::HalfSpace(h) => ok(h),
+        };
+        base && self.chain.0.iter().all(|s| match s {
+            Step::Translate(v) | Step::ScaleXyz(v) => ok(v),
+            Step::Scale(x) | Step::RotateX(x) | Step::RotateY(x) | Step::RotateZ(x) => ok(&[*x]),
+            Step::Matrix(m) => ok(m),
+        })
+    }
+
     /// Builds the solid (which may be non-finite if a long chain overflowed).
     pub fn build(&self) -> core::result::Result<Solid, GeometryError> {
         let s = self.base.build()?;

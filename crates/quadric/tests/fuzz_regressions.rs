@@ -83,3 +83,17 @@ fn nearly_singular_matrix_is_rejected() {
     );
     assert!(Transform::from_matrix(&m).is_err(), "{:?}", Transform::from_matrix(&m));
 }
+
+/// A ray far out along an infinite tube's axis that never comes near the
+/// tube (`y - x = 3` all along it): re-basing the ray at the foot of the
+/// perpendicular from the tube's centre (1e17 away) rounded away the 3, and
+/// the ray seemed to run inside the tube. Caught by the complex fuzz target
+/// (the block's box, which is right, culls the tube; the brute force did not).
+#[test]
+fn far_along_a_tube_axis_the_offset_survives() {
+    for (offset, far) in [(3.0, 1e17), (296.0, 1.9018000000000003e78)] {
+        let r = ray([0.0, offset, far], [1.0, 1.0, 1.0]);
+        let set = Quadric::tube_z().intervals(&r, 0);
+        assert!(set.is_empty(), "offset {offset} at {far:e}: {set:?}");
+    }
+}
