@@ -77,3 +77,20 @@ fn eigenvalue_lost_in_rounding_keeps_the_box_conservative() {
     assert!(!brute.is_empty());
     assert_eq!(c.intervals(&r), vec![(BlockId(0), brute)]);
 }
+
+/// A ray starting on the plane `x = 0` of a transparent block and leaving
+/// it: the kernel puts the exit at 4.4e-16 (an ulp of the origin's
+/// coordinates, within its stated accuracy), just outside the block's exact
+/// box, and with a degenerate second block ε is 1e-106. The partition (which
+/// meets the box at t = 0) had the exit event; `cast_ray`, probing the boxes
+/// at t = ε, missed the block and returned nothing.
+#[test]
+fn cast_ray_finds_an_exit_just_outside_the_exact_box() {
+    let point_block = vec![Solid::from(Quadric::paraboloid()), hs(0.0, 1.0, 0.0, -2.0), hs(0.0, 43.0, 0.0, 0.0)];
+    let wedge = vec![hs(0.0, 3.0, 3.0, 0.0).complement(), hs(6.0, 0.0, 0.0, 0.0)];
+    let c = complex(vec![block("point", point_block, O, 0), block("wedge", wedge, T, 3)]);
+    let r = ray([0.0, 4.0, 12.0], [4.0, 5.0, 0.015625]);
+    let p = c.partition(&r);
+    let first = p.events.iter().find(|e| e.t > c.epsilon() && c.is_visible(e)).map(|e| (e.t, e.surface.block));
+    assert_eq!(c.cast_ray(&r, f64::INFINITY).map(|h| (h.t, h.block)), first, "{p:?}");
+}
