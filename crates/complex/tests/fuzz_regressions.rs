@@ -94,3 +94,23 @@ fn cast_ray_finds_an_exit_just_outside_the_exact_box() {
     let first = p.events.iter().find(|e| e.t > c.epsilon() && c.is_visible(e)).map(|e| (e.t, e.surface.block));
     assert_eq!(c.cast_ray(&r, f64::INFINITY).map(|h| (h.t, h.block)), first, "{p:?}");
 }
+
+/// The degenerate slab `y² <= 0` (the plane y = 0, no interior): the kernel
+/// gives a sliver of length 6e-8 around the crossing (the square root of a
+/// rounding-level discriminant), which lies outside the block's exact box
+/// (`|y| <=` 1e-308). The partition (which meets the box at the crossing)
+/// has the sliver's events; `cast_ray` with a transparent block present
+/// probes the boxes at the sliver's ends and misses it.
+#[test]
+#[ignore = "open: cast_ray's box probes miss intervals the kernel puts outside a block's exact box (sqrt-ε slivers)"]
+fn cast_ray_agrees_with_the_partition_on_a_zero_thickness_slab() {
+    let slab = vec![Solid::from(
+        Quadric::from_coefficients([0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).expect("finite"),
+    )];
+    let capped = vec![Solid::from(Quadric::tube_y()), hs(0.0, 1.0, 0.0, -2.0), hs(0.0, 43.0, 0.0, 0.0)];
+    let c = complex(vec![block("disc", capped, T, 0), block("slab", slab, O, 0)]);
+    let r = ray([17.0, 19.0, 3.0], [-6.0, -19.0, 2.0]);
+    let p = c.partition(&r);
+    let first = p.events.iter().find(|e| e.t > c.epsilon() && c.is_visible(e)).map(|e| (e.t, e.surface.block));
+    assert_eq!(c.cast_ray(&r, f64::INFINITY).map(|h| (h.t, h.block)), first, "{p:?}");
+}
