@@ -31,9 +31,16 @@ const FAR: f64 = 1e100;
 /// Whether the current input's numbers are all moderate (set per input).
 static MODERATE_INPUT: AtomicBool = AtomicBool::new(false);
 
+/// Whether the ray's origin and (unit) direction components are moderate: a
+/// direction component of 1e-323 has no significant bits left.
+fn moderate_ray(ray: &Ray) -> bool {
+    ray.origin().iter().chain(ray.direction().iter()).all(|x| bound::moderate(*x))
+}
+
 fn tolerance(s: &Solid, ray: &Ray, t: f64) -> Option<f64> {
     let p = ray.at(t);
     if !(MODERATE_INPUT.load(Ordering::Relaxed)
+        && moderate_ray(ray)
         && bound::moderate_solid(s)
         && p.iter().all(|x| bound::moderate(*x))
         && t <= 1e100)
@@ -60,7 +67,7 @@ fn tolerance(s: &Solid, ray: &Ray, t: f64) -> Option<f64> {
 fn in_range(solid: &Solid, ray: &Ray) -> bool {
     // Beyond moderate inputs (coefficients near 1e308 or 1e-320, which a
     // kernel may rescale into subnormals), only "no panic, no NaN" holds.
-    if !(MODERATE_INPUT.load(Ordering::Relaxed) && ray.origin().iter().all(|x| bound::moderate(*x))) {
+    if !(MODERATE_INPUT.load(Ordering::Relaxed) && moderate_ray(ray)) {
         return false;
     }
     let Some(m) = bound::magnitude(solid, &ray.origin()) else { return false };
