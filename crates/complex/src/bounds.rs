@@ -14,6 +14,7 @@
 //! cuts off a point of the block.
 
 use quadric::nalgebra::{Matrix3, Point3, Vector3};
+use quadric::roots::difference_of_products;
 use quadric::{Ray, Solid};
 
 /// An axis-aligned box `[min, max]`; coordinates may be `±∞` for unbounded blocks.
@@ -289,9 +290,14 @@ fn core(q: &quadric::Quadric) -> Option<Core> {
         if w.dot(&axis).abs() > 1e-9 * w.norm() {
             return None; // a parabolic cylinder: left to propagation
         }
-        // A slightly negative l0 (rounding) makes a very slender hyperboloid:
-        // keep its spread so the box stays conservative.
-        (-(p * w), (-l0).max(0.0))
+        // A slightly negative eigenvalue makes a very slender hyperboloid:
+        // keep its spread so the box stays conservative. The computed `l0`
+        // is off by up to the solver's error, about ε·top (exact for a
+        // diagonal `A`), which can hide a true eigenvalue of either sign:
+        // the spread covers the most negative one it may be.
+        let diagonal = a[(0, 1)] == 0.0 && a[(0, 2)] == 0.0 && a[(1, 2)] == 0.0;
+        let noise = if diagonal { 0.0 } else { 64.0 * f64::EPSILON * top };
+        (-(p * w), (noise - l0).max(0.0))
     } else {
         // One negative direction: a cone or a hyperboloid around the axis.
         (-(p * w) - axis * (axis.dot(&w) / l0), -l0)
@@ -347,8 +353,14 @@ fn analytic_box(q: &quadric::Quadric, solids: &[Solid]) -> Aabb {
                 // bounded, and only for a cylinder.
                 let mut bx = Aabb::INFINITE;
                 if spread == 0.0 {
+                    // Any tilt, however small, makes the cylinder unbounded on
+                    // that axis, and the eigenvector solver drops tilts below
+                    // its tolerance (1e-16 rad matters at distance 1e16 from
+                    // the centre). So the zero components are taken from the
+                    // kernel of `A` computed without that tolerance as well.
+                    let kernel = kernel_direction(q.quadratic_part());
                     for i in 0..3 {
-                        if axis[i] == 0.0 {
+                        if axis[i] == 0.0 && kernel[i] == 0.0 {
                             let h = (r * p[(i, i)].max(0.0)).sqrt();
                             let slack = margin * h + WIDEN_ABS * point[i].abs() + f64::MIN_POSITIVE;
                             bx.min[i] = point[i] - h - slack;
@@ -371,6 +383,29 @@ fn analytic_box(q: &quadric::Quadric, solids: &[Solid]) -> Aabb {
             bx
         }
     }
+}
+
+/// A vector spanning the kernel of a rank-2 symmetric `a` (the axis of a
+/// cylinder), as the longest cross product of two of its rows. A component
+/// is zero only if it is exactly zero in both rows' cross product (each one
+/// a fused difference of products, zero only if exactly zero), so structural
+/// zeros survive and any tilt shows.
+fn kernel_direction(a: &Matrix3<f64>) -> Vector3<f64> {
+    let cross = |x: usize, y: usize| {
+        let (u, v) = (a.row(x), a.row(y));
+        Vector3::new(
+            difference_of_products(u[1], v[2], u[2], v[1]),
+            difference_of_products(u[2], v[0], u[0], v[2]),
+            difference_of_products(u[0], v[1], u[1], v[0]),
+        )
+    };
+    [cross(0, 1), cross(0, 2), cross(1, 2)].into_iter().fold(Vector3::zeros(), |best, k| {
+        if k.amax() > best.amax() {
+            k
+        } else {
+            best
+        }
+    })
 }
 
 /// The range of `s` over which some point `point + s·axis + q` of the

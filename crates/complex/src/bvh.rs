@@ -56,12 +56,20 @@ pub(crate) struct Bvh {
 pub(crate) struct RayBoxes {
     origin: [f64; 3],
     inv: [f64; 3],
+    /// How far outside a block's exact box the kernel may put the ends of
+    /// the block's intervals: they are accurate to a few ulps of the ray
+    /// origin's coordinates, which near a box at the origin (a ray leaving
+    /// the plane x = 0 from (0, 4, 12)) is far more than the box's own
+    /// widening. Boxes are grown by this much in the slab test.
+    pad: f64,
 }
 
 impl RayBoxes {
     pub(crate) fn new(ray: &Ray) -> Self {
         let (o, d) = (ray.origin(), ray.direction());
-        RayBoxes { origin: [o.x, o.y, o.z], inv: [1.0 / d.x, 1.0 / d.y, 1.0 / d.z] }
+        // About 450 ulps of the origin, as `WIDEN_ABS` in `bounds.rs`.
+        let pad = 1e-13 * o.coords.amax();
+        RayBoxes { origin: [o.x, o.y, o.z], inv: [1.0 / d.x, 1.0 / d.y, 1.0 / d.z], pad }
     }
 
     /// The entry parameter of the ray into the closed box within
@@ -78,8 +86,8 @@ impl RayBoxes {
         let (mut t0, mut t1) = (t_min, t_max);
         for i in 0..3 {
             let inv = self.inv[i];
-            let a = (min[i] - self.origin[i]) * inv;
-            let b = (max[i] - self.origin[i]) * inv;
+            let a = (min[i] - self.pad - self.origin[i]) * inv;
+            let b = (max[i] + self.pad - self.origin[i]) * inv;
             let (a, b) = if inv >= 0.0 { (a, b) } else { (b, a) };
             // NaN (∞ - ∞ on an infinite side, 0·∞) fails both tests and leaves the range open.
             if a > t0 {

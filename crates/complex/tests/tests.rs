@@ -3,6 +3,7 @@
 mod alloc;
 mod bounds;
 mod common;
+mod fuzz_regressions;
 mod kernel;
 mod oracle;
 mod seed;

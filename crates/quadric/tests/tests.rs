@@ -2,6 +2,7 @@
 
 mod accuracy;
 mod bad_input;
+mod fuzz_regressions;
 mod laws;
 mod oracle;
 mod table;

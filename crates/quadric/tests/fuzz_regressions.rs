@@ -1,0 +1,101 @@
+//! Minimised inputs from the `quadric_intervals` fuzz target (`fuzz/`), one
+//! test each: the input that failed and the law it broke.
+
+use nalgebra::{Matrix4, Point3, Vector3};
+use quadric::{IntervalSet, Quadric, Ray, Solid, Transform};
+
+fn ray(o: [f64; 3], d: [f64; 3]) -> Ray {
+    Ray::new(Point3::from(o), Vector3::from(d)).expect("valid ray")
+}
+
+/// A solid and its complement cover the ray `[0, ∞)` with nothing left out.
+fn check_cover(s: Solid, r: &Ray) {
+    let (a, b) = (s.intervals(r, 0), s.complement().intervals(r, 0));
+    let union = a.union(&b).expect("within capacity");
+    let whole = IntervalSet::everything().clip(0.0, f64::INFINITY);
+    assert!(union.same_points(&whole), "{a:?} ∪ {b:?} leaves a gap");
+}
+
+/// `t` of the re-based quadratic came out `+0.0` for both `Q` and `-Q`, so
+/// `stable_roots` took the sign of `√disc` from `+0.0` in both and computed
+/// each root by the other formula for the complement: a one-ulp gap
+/// (7.824047192338361 vs …362) in no solid at all.
+#[test]
+fn complement_shares_roots_when_t_is_zero() {
+    let m = Transform::scale_xyz(Vector3::new(2.0, 0.5, 1.0))
+        .and_then(|m| Ok(m.then(&Transform::rotate_z_degrees(30.0)?)))
+        .and_then(|m| Ok(m.then(&Transform::translate(Vector3::new(1.0, -2.0, 3.0))?)))
+        .expect("finite");
+    let cone = Solid::from(Quadric::cone().transformed(&m));
+    check_cover(cone, &ray([-5.0, 1.0, 0.0], [1.0, 0.0, 0.0]));
+}
+
+/// A ray nearly along the cone's surface from 3e120 (inside the documented
+/// range): the re-basing point `-t/s` overflowed and both the cone and its
+/// complement gave the empty set, though the origin is in the complement.
+#[test]
+fn complement_covers_when_the_apex_of_the_quadratic_overflows() {
+    let m = Transform::rotate_y_degrees(2.981200000000001e120).expect("finite");
+    let cone = Solid::from(Quadric::cone().transformed(&m));
+    let far = 2.981200000000001e120;
+    let r = ray([far, far, far], [far, far, 116.0]);
+    check_cover(cone, &r);
+    assert!(cone.complement().intervals(&r, 0).contains(0.0), "the origin is outside the cone");
+}
+
+/// A gradient with an infinite and a NaN component (`∞ - ∞` far out) gave a
+/// NaN normal: `amax` skips NaN, so the "not finite" test passed.
+#[test]
+fn no_nan_normal_from_an_overflowing_gradient() {
+    let c = [
+        4.4533304e-317,
+        0.0,
+        -118.99999999999831,
+        -1.0137433199815556e-262,
+        -2.9754888241172404e284,
+        -0.0,
+        0.0,
+        2.0,
+        -0.015625,
+        -0.0,
+    ];
+    let m = Transform::translate(Vector3::new(-1e150, -1e150, 0.0))
+        .and_then(|m| Ok(m.then(&Transform::rotate_x_degrees(-1e150)?).then(&Transform::rotate_x_degrees(-1e150)?)))
+        .expect("finite");
+    let q = Quadric::from_coefficients(c).expect("finite").transformed(&m);
+    let n = q.normal(&Point3::new(-1e150, -1e150, -1e150));
+    assert!(n.is_none_or(|n| n.iter().all(|x| x.is_finite())), "{n:?}");
+}
+
+/// Two rows equal but for 1e-300 (condition number about 1e316): the
+/// residual `L·L⁻¹ - I` has NaN entries (∞ - ∞), `amax` skips them, and
+/// `f64::max` ignores a NaN, so the matrix passed the "too close to
+/// singular" check with an inverse of 1.7e301.
+#[test]
+#[ignore = "open: Transform::from_matrix's residual check skips NaN (amax, f64::max); fix in transform.rs"]
+fn nearly_singular_matrix_is_rejected() {
+    let big = 9007199254740992.0;
+    #[rustfmt::skip]
+    let m = Matrix4::new(
+        0.0, 4.0, 69.0, big,
+        big, big, 1e-300, 76.00000000000108,
+        big, big, -0.0, 0.0,
+        0.0, 0.0, 0.0, 1.0,
+    );
+    assert!(Transform::from_matrix(&m).is_err(), "{:?}", Transform::from_matrix(&m));
+}
+
+/// A ray far out along an infinite tube's axis that never comes near the
+/// tube (`y - x = 3` all along it): re-basing the ray at the foot of the
+/// perpendicular from the tube's centre (1e17 away) rounded away the 3, and
+/// the ray seemed to run inside the tube. Caught by the complex fuzz target
+/// (the block's box, which is right, culls the tube; the brute force did not).
+#[test]
+#[ignore = "open: the re-basing at the centre's foot rounds at the scale of |p - c| (quadric.rs)"]
+fn far_along_a_tube_axis_the_offset_survives() {
+    for (offset, far) in [(3.0, 1e17), (296.0, 1.9018000000000003e78)] {
+        let r = ray([0.0, offset, far], [1.0, 1.0, 1.0]);
+        let set = Quadric::tube_z().intervals(&r, 0);
+        assert!(set.is_empty(), "offset {offset} at {far:e}: {set:?}");
+    }
+}
