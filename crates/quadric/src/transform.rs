@@ -140,9 +140,9 @@ impl Transform {
         if !inverse.iter().all(|c| c.is_finite()) {
             return Err(GeometryError::Singular { reason: "the matrix inverse overflows" });
         }
-        let residual =
-            (linear * inverse - Matrix3::identity()).amax().max((inverse * linear - Matrix3::identity()).amax());
-        if residual.is_nan() || residual > 1e-9 {
+        // `amax` and `f64::max` skip NaN, so test every entry: NaN fails `<=`.
+        let close = |m: Matrix3<f64>| (m - Matrix3::identity()).iter().all(|x| x.abs() <= 1e-9);
+        if !(close(linear * inverse) && close(inverse * linear)) {
             return Err(GeometryError::Singular { reason: "the matrix is too close to singular" });
         }
         Ok(Transform { linear, inverse, translation })

@@ -72,7 +72,6 @@ fn no_nan_normal_from_an_overflowing_gradient() {
 /// `f64::max` ignores a NaN, so the matrix passed the "too close to
 /// singular" check with an inverse of 1.7e301.
 #[test]
-#[ignore = "open: Transform::from_matrix's residual check skips NaN (amax, f64::max); fix in transform.rs"]
 fn nearly_singular_matrix_is_rejected() {
     let big = 9007199254740992.0;
     #[rustfmt::skip]
