@@ -254,17 +254,69 @@ enum Core {
     Axial { point: Vector3<f64>, axis: Vector3<f64>, p: Matrix3<f64>, r: f64, spread: f64, margin: f64 },
 }
 
+/// The eigen-decomposition `A = V diag(λ) Vᵀ` of a symmetric 3×3 matrix by
+/// cyclic Jacobi rotations, `(λ, V)`, or `None` if it fails its own check.
+///
+/// Not nalgebra's `symmetric_eigen`: for some matrices it pairs eigenvalues
+/// with the wrong eigenvectors (dimforge/nalgebra#1109; a circular double
+/// cone with eigenvalues -2, 2, 2 came back with its axis off by 30°, so the
+/// box cut off part of the block). Jacobi is backward stable, with errors of
+/// a few ε·‖A‖, and structural zeros stay exact: a diagonal `A` needs no
+/// rotation. The result is checked a posteriori anyway, since every margin
+/// below assumes the residual `‖AV - VΛ‖` and `‖VᵀV - I‖` are that small;
+/// the caller falls back to propagation alone if they are not.
+fn symmetric_eigen(a: &Matrix3<f64>) -> Option<(Vector3<f64>, Matrix3<f64>)> {
+    let norm = a.norm();
+    if !norm.is_finite() {
+        return None;
+    }
+    let mut m = *a;
+    let mut v = Matrix3::identity();
+    for _sweep in 0..64 {
+        // Off-diagonal entries below ε²‖A‖ change no eigenvalue by more than rounding.
+        let off = [(0, 1), (0, 2), (1, 2)];
+        if off.iter().all(|&(p, q)| m[(p, q)].abs() <= f64::EPSILON * f64::EPSILON * norm) {
+            break;
+        }
+        for (p, q) in off {
+            let apq = m[(p, q)];
+            if apq.abs() <= f64::EPSILON * f64::EPSILON * norm {
+                continue;
+            }
+            // The rotation that zeroes m[p][q], by its smaller angle (Numerical Recipes §11.1).
+            let theta = (m[(q, q)] - m[(p, p)]) / (2.0 * apq);
+            let t = theta.signum() / (theta.abs() + theta.hypot(1.0));
+            let cos = 1.0 / t.hypot(1.0);
+            let sin = t * cos;
+            let mut j = Matrix3::identity();
+            j[(p, p)] = cos;
+            j[(q, q)] = cos;
+            j[(p, q)] = sin;
+            j[(q, p)] = -sin;
+            m = j.transpose() * m * j;
+            // Symmetric by construction; the zeroed entry is exactly zero.
+            m[(p, q)] = 0.0;
+            m[(q, p)] = 0.0;
+            v *= j;
+        }
+    }
+    let lambda = m.diagonal();
+    let residual = (a * v - v * Matrix3::from_diagonal(&lambda)).amax();
+    let orthogonality = (v.transpose() * v - Matrix3::identity()).amax();
+    (residual <= 32.0 * f64::EPSILON * norm && orthogonality <= 32.0 * f64::EPSILON).then_some((lambda, v))
+}
+
 fn core(q: &quadric::Quadric) -> Option<Core> {
     let (c, a, w, k) = q.local_parts();
-    let eig = a.symmetric_eigen();
-    let top = eig.eigenvalues.amax();
+    let (eigenvalues, eigenvectors) = symmetric_eigen(&a)?;
+    let top = eigenvalues.amax();
     if !(top > 0.0 && top.is_finite()) {
         return None;
     }
     let tol = 1e-9 * top;
     let mut order = [0usize, 1, 2];
-    order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
-    let (l0, l1) = (eig.eigenvalues[order[0]], eig.eigenvalues[order[1]]);
+    order.sort_by(|&i, &j| eigenvalues[i].total_cmp(&eigenvalues[j]));
+    let (l0, l1) = (eigenvalues[order[0]], eigenvalues[order[1]]);
     if l1 <= tol {
         return None; // at most one positive direction: unbounded cross-sections
     }
@@ -280,11 +332,11 @@ fn core(q: &quadric::Quadric) -> Option<Core> {
         let r = if r < -margin * scale { -1.0 } else { r.max(0.0) + margin * scale };
         return Some(Core::Ellipsoid { centre: c.coords + d0, inverse, r, margin });
     }
-    let axis = eig.eigenvectors.column(order[0]).into_owned();
+    let axis = eigenvectors.column(order[0]).into_owned();
     let mut p = Matrix3::zeros();
     for &i in &order[1..] {
-        let v = eig.eigenvectors.column(i);
-        p += v * v.transpose() / eig.eigenvalues[i];
+        let v = eigenvectors.column(i);
+        p += v * v.transpose() / eigenvalues[i];
     }
     let (d0, spread) = if l0.abs() <= tol {
         if w.dot(&axis).abs() > 1e-9 * w.norm() {
