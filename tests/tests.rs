@@ -8,5 +8,6 @@ mod camera;
 mod cli;
 mod errors;
 mod exr_output;
+mod pov;
 mod shading;
 mod trace;

@@ -28,6 +28,7 @@ pub mod frame;
 mod locate;
 mod output;
 pub mod png;
+pub mod pov;
 pub mod scene;
 pub mod shade;
 pub mod trace;
