@@ -6,7 +6,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use crate::support::{all_scenes, komplex_ok, render_frame, tempdir, text, world};
+use crate::support::{all_scenes, bench_scenes, komplex_ok, render_frame, tempdir, text, world};
 
 const WIDTH: u32 = 160;
 const HEIGHT: u32 = 120;
@@ -60,7 +60,9 @@ fn povray_masks_match_block_ids() {
         return;
     }
     let dir = tempdir();
-    for scene in all_scenes() {
+    // The example scenes and the committed benchmark scenes (rotated boxes
+    // and capped cylinders, hundreds of small spheres).
+    for scene in all_scenes().into_iter().chain(bench_scenes()) {
         let ours: Vec<u32> =
             render_frame(&world(&scene, Some((WIDTH, HEIGHT)))).pixels.iter().map(|p| p.block).collect();
         let theirs = pov_mask(dir.path(), &scene);

@@ -4,6 +4,7 @@
 mod geom;
 mod support;
 
+mod bench;
 mod camera;
 mod cli;
 mod errors;

@@ -20,11 +20,13 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod bench;
 pub mod camera;
 pub mod check;
 mod error;
 pub mod exr;
 pub mod frame;
+pub mod generate;
 mod locate;
 mod output;
 pub mod png;

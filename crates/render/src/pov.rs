@@ -115,32 +115,57 @@ fn write_scene(out: &mut String, world: &World, options: PovOptions) -> std::fmt
     writeln!(out, "union {{")?;
     for (b, block) in world.complex.blocks().iter().enumerate() {
         let id = b as u32 + 1;
-        writeln!(out, "  intersection {{ // {} {}", id, block.name().replace(['\n', '\r'], " "))?;
+        let key = complex::BlockId(b as u32);
+        // A one-solid block is the solid itself: POV warns about a CSG of
+        // one member, and the wrapper would only cost it time.
+        let single = block.solids().len() == 1;
+        let indent = if single { "  " } else { "    " };
+        writeln!(out, "  // block {} {}", id, block.name().replace(['\n', '\r'], " "))?;
+        if !single {
+            writeln!(out, "  intersection {{")?;
+        }
         for (j, solid) in block.solids().iter().enumerate() {
-            write!(out, "    ")?;
+            write!(out, "{indent}")?;
             match solid {
                 Solid::Quadric(q) => write_quadric(out, q)?,
                 Solid::HalfSpace(hs) => write_plane(out, hs)?,
             }
+            // The solid is still open: its texture goes inside its braces.
             if !options.mask {
-                let m = world.surface_material(complex::BlockId(b as u32), j as u32);
+                let m = world.surface_material(key, j as u32);
                 write!(out, " texture {{ {} }}", texture(m, &s.ambient))?;
             }
-            writeln!(out)?;
+            if single {
+                write!(out, "{}", block_modifiers(world, key, id, options))?;
+            }
+            writeln!(out, " }}")?;
         }
-        if options.mask {
-            let [r, g, bl] = mask_color(id);
-            writeln!(out, "    pigment {{ rgb <{}/255, {}/255, {}/255> }} finish {{ ambient 1 diffuse 0 }}", r, g, bl)?;
-        } else if block.is_transparent() {
-            let m = world.block_material(complex::BlockId(b as u32));
-            writeln!(out, "    interior {{ ior {} }}", Num(m.ior))?;
+        if !single {
+            let modifiers = block_modifiers(world, key, id, options);
+            if !modifiers.is_empty() {
+                writeln!(out, "   {modifiers}")?;
+            }
+            writeln!(out, "  }}")?;
         }
-        writeln!(out, "  }}")?;
     }
     writeln!(out, "}}")
 }
 
-/// `quadric { … } matrix < … >` in the quadric's eigenframe (see the module docs).
+/// The modifiers a block carries as a whole: the mask colour, or the
+/// interior of a transparent block; empty or starting with a space.
+fn block_modifiers(world: &World, key: complex::BlockId, id: u32, options: PovOptions) -> String {
+    if options.mask {
+        let [r, g, b] = mask_color(id);
+        format!(" pigment {{ rgb <{r}/255, {g}/255, {b}/255> }} finish {{ ambient 1 diffuse 0 }}")
+    } else if world.complex.block(key).is_transparent() {
+        format!(" interior {{ ior {} }}", Num(world.block_material(key).ior))
+    } else {
+        String::new()
+    }
+}
+
+/// `quadric { … matrix < … >` in the quadric's eigenframe (see the module
+/// docs), without the closing brace.
 fn write_quadric(out: &mut String, q: &Quadric) -> std::fmt::Result {
     let (c, a, w, k) = q.local_parts();
     let eig = SymmetricEigen::new(a);
@@ -173,7 +198,7 @@ fn write_quadric(out: &mut String, q: &Quadric) -> std::fmt::Result {
     }
     write!(
         out,
-        "quadric {{ {}, <0, 0, 0>, {}, {} matrix <{}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}>{} }}",
+        "quadric {{ {}, <0, 0, 0>, {}, {} matrix <{}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}>{}",
         v3(&lambda),
         v3(&(2.0 * lin)),
         Num(k),
@@ -196,7 +221,7 @@ fn write_quadric(out: &mut String, q: &Quadric) -> std::fmt::Result {
 }
 
 /// `plane { n/|n|, -d/|n| }` around the half-space's reference point `o`:
-/// `n·(x − o) + d ≤ 0`.
+/// `n·(x − o) + d ≤ 0`; without the closing brace.
 fn write_plane(out: &mut String, h: &HalfSpace) -> std::fmt::Result {
     let n = *h.normal_vector();
     let len = n.norm();
@@ -206,7 +231,7 @@ fn write_plane(out: &mut String, h: &HalfSpace) -> std::fmt::Result {
     if o.coords != Vector3::zeros() {
         write!(out, " translate {}", v3(&o.coords))?;
     }
-    write!(out, " }}")
+    Ok(())
 }
 
 /// A POV texture approximating a material under our shading model (SPEC §5):
