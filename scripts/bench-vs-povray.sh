@@ -30,7 +30,7 @@ done
 
 command -v povray >/dev/null || { echo "povray is not installed (apt-get install povray)" >&2; exit 2; }
 cargo build --release --quiet
-komplex=target/release/komplex
+komplex="${CARGO_TARGET_DIR:-target}/release/komplex"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 

@@ -237,19 +237,28 @@ fn write_plane(out: &mut String, h: &HalfSpace) -> std::fmt::Result {
 /// A POV texture approximating a material under our shading model (SPEC §5):
 /// the pigment is the diffuse colour, POV's ambient is scaled so that
 /// `pigment × ambient = Ma × Sa`, Phong or Blinn-Phong maps to `phong` or
-/// `specular`, and `transmit` to the pigment's transmit channel.
+/// `specular`, and `transmit` to the pigment's filter channel.
 fn texture(m: &Material, scene_ambient: &[f64; 3]) -> String {
-    let pigment = if m.diffuse.iter().any(|x| *x > 0.0) { m.diffuse } else { m.ambient };
+    let filter = m.transmit.max();
+    let (pigment, diffuse) = if filter > 0.0 {
+        // POV filters transmitted light by the pigment colour: colour
+        // `kt/max(kt)` with filter `max(kt)` transmits `kt`. The diffuse
+        // coefficient then carries the diffuse reflectance's brightness.
+        let c = m.transmit / filter;
+        (c, m.diffuse.mean() / c.mean())
+    } else if m.diffuse.iter().any(|x| *x > 0.0) {
+        (m.diffuse, 1.0)
+    } else {
+        (m.ambient, 0.0)
+    };
     let want_ambient = m.ambient.component_mul(&Vector3::from(*scene_ambient));
     let ambient = Vector3::from_fn(|i, _| if pigment[i] > 0.0 { want_ambient[i] / pigment[i] } else { 0.0 });
-    let diffuse = if m.diffuse.iter().any(|x| *x > 0.0) { 1.0 } else { 0.0 };
-    let transmit = m.transmit.mean();
     let mut t = format!(
-        "pigment {{ rgbt <{}, {}, {}, {}> }} finish {{ ambient rgb {} diffuse {}",
+        "pigment {{ rgbf <{}, {}, {}, {}> }} finish {{ ambient rgb {} diffuse {}",
         Num(pigment.x),
         Num(pigment.y),
         Num(pigment.z),
-        Num(transmit),
+        Num(filter),
         v3(&ambient),
         Num(diffuse)
     );
