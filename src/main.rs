@@ -151,6 +151,20 @@ fn triple(v: &[f64]) -> [f64; 3] {
     [v[0], v[1], v[2]]
 }
 
+/// Applies `--width`/`--height` to the world's camera; one alone keeps the aspect ratio.
+fn resize(world: &mut render::scene::World, width: Option<u32>, height: Option<u32>) -> Result<(), Error> {
+    let cam = world.camera;
+    let (w0, h0) = (f64::from(cam.width()), f64::from(cam.height()));
+    let size = match (width, height) {
+        (None, None) => return Ok(()),
+        (Some(w), Some(h)) => (w, h),
+        (Some(w), None) => (w, ((f64::from(w) * h0 / w0).round() as u32).max(1)),
+        (None, Some(h)) => (((f64::from(h) * w0 / h0).round() as u32).max(1), h),
+    };
+    world.camera = cam.with_size(size.0, size.1).map_err(|e| Error::Options(format!("--width/--height: {e}")))?;
+    Ok(())
+}
+
 fn run(command: Command) -> Result<(), Error> {
     match command {
         Command::Render { scene, output, png, width, height, threads, samples, half, exposure } => {
@@ -280,20 +294,6 @@ fn run(command: Command) -> Result<(), Error> {
             }
         }
     }
-}
-
-/// Applies `--width`/`--height` to the world's camera; one alone keeps the aspect ratio.
-fn resize(world: &mut render::scene::World, width: Option<u32>, height: Option<u32>) -> Result<(), Error> {
-    let cam = world.camera;
-    let (w0, h0) = (f64::from(cam.width()), f64::from(cam.height()));
-    let size = match (width, height) {
-        (None, None) => return Ok(()),
-        (Some(w), Some(h)) => (w, h),
-        (Some(w), None) => (w, ((f64::from(w) * h0 / w0).round() as u32).max(1)),
-        (None, Some(h)) => (((f64::from(h) * w0 / h0).round() as u32).max(1), h),
-    };
-    world.camera = cam.with_size(size.0, size.1).map_err(|e| Error::Options(format!("--width/--height: {e}")))?;
-    Ok(())
 }
 
 /// The scene's stem with `.exr`, in the current directory.

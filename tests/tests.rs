@@ -9,6 +9,7 @@ mod camera;
 mod cli;
 mod errors;
 mod exr_output;
-mod pov;
 mod shading;
 mod trace;
+
+mod pov;
