@@ -21,4 +21,3 @@ fmt:
 
 lint:
     cargo clippy --workspace --all-targets -- -D warnings
-
