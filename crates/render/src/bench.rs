@@ -5,6 +5,17 @@
 //! and all rays (primary, shadow, reflected, refracted) over the same
 //! wall-clock time of the render loop. Loading and building the kernel are
 //! timed apart.
+//!
+//! ```
+//! let dir = tempfile::tempdir().unwrap();
+//! let path = dir.path().join("ball.json");
+//! std::fs::write(&path, r#"{ "camera": { "eye": [0, 0, 5], "direction": [0, 0, -1] },
+//!                            "lights": [ { "position": [2, 2, 5] } ],
+//!                            "blocks": [ { "objects": [ { "sphere": {} } ] } ] }"#).unwrap();
+//! let m = render::bench::measure(&path, Some((8, 6)), Some(1)).unwrap();
+//! assert_eq!((m.blocks, m.primary), (1, 48));
+//! assert!(m.rays > m.primary); // shadow rays from the pixels that see the ball
+//! ```
 
 use std::path::Path;
 use std::time::{Duration, Instant};
