@@ -11,6 +11,11 @@ test:
 ci:
     bash .ci/run
 
+# Komplex vs POV-Ray 3.7 (needs povray): primary rays/s of both and the ratio.
+# Pass options through, e.g. `just bench-pov --threads 2 --width 320 --height 240`.
+bench-pov *ARGS:
+    bash scripts/bench-vs-povray.sh {{ARGS}}
+
 fmt:
     cargo fmt --all
 

@@ -79,6 +79,65 @@ enum Command {
     },
     /// Print the JSON Schema (draft-07) of the scene format.
     Schema,
+    /// Write the scene for POV-Ray 3.7 (for comparison renders).
+    ExportPov {
+        /// The scene file (JSON).
+        scene: PathBuf,
+        /// Output .pov file [default: stdout].
+        #[arg(short, long, value_name = "OUT.pov")]
+        output: Option<PathBuf>,
+        /// Flat block colours encoding the 1-based block id (an id mask), no lights.
+        #[arg(long)]
+        mask: bool,
+        /// Image width (overrides the scene; alone, keeps the aspect ratio).
+        #[arg(long, value_name = "W")]
+        width: Option<u32>,
+        /// Image height (overrides the scene; alone, keeps the aspect ratio).
+        #[arg(long, value_name = "H")]
+        height: Option<u32>,
+    },
+    /// Render scenes once each and print rays per second (primary and all rays).
+    Bench {
+        /// The scene files (JSON).
+        #[arg(required = true)]
+        scenes: Vec<PathBuf>,
+        /// Image width [default: the scene's].
+        #[arg(long, value_name = "W")]
+        width: Option<u32>,
+        /// Image height [default: the scene's].
+        #[arg(long, value_name = "H")]
+        height: Option<u32>,
+        /// Worker threads [default: one per core].
+        #[arg(long, value_name = "N")]
+        threads: Option<usize>,
+    },
+    /// Write a benchmark scene (JSON).
+    Generate {
+        #[command(subcommand)]
+        kind: Generator,
+        /// Output file [default: stdout].
+        #[arg(short, long, value_name = "OUT.json", global = true)]
+        output: Option<PathBuf>,
+    },
+}
+
+#[derive(Subcommand)]
+enum Generator {
+    /// Haines' sphereflake: 1 + 9 + … + 9^L reflective spheres on a ground plane, three lights.
+    Sphereflake {
+        /// Recursion depth L (3: 820 spheres, 4: 7,381).
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=6))]
+        level: u32,
+    },
+    /// N random bounded blocks (spheres, capped cylinders, boxes; rotated) on a cubic grid.
+    Grid {
+        /// Number of blocks.
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000_000))]
+        count: u32,
+        /// Random seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
 }
 
 fn main() -> ExitCode {
@@ -98,6 +157,20 @@ fn main() -> ExitCode {
 
 fn triple(v: &[f64]) -> [f64; 3] {
     [v[0], v[1], v[2]]
+}
+
+/// Applies `--width`/`--height` to the world's camera; one alone keeps the aspect ratio.
+fn resize(world: &mut render::scene::World, width: Option<u32>, height: Option<u32>) -> Result<(), Error> {
+    let cam = world.camera;
+    let (w0, h0) = (f64::from(cam.width()), f64::from(cam.height()));
+    let size = match (width, height) {
+        (None, None) => return Ok(()),
+        (Some(w), Some(h)) => (w, h),
+        (Some(w), None) => (w, ((f64::from(w) * h0 / w0).round() as u32).max(1)),
+        (None, Some(h)) => (((f64::from(h) * w0 / h0).round() as u32).max(1), h),
+    };
+    world.camera = cam.with_size(size.0, size.1).map_err(|e| Error::Options(format!("--width/--height: {e}")))?;
+    Ok(())
 }
 
 fn run(command: Command) -> Result<(), Error> {
@@ -189,6 +262,59 @@ fn run(command: Command) -> Result<(), Error> {
         Command::Schema => {
             print!("{}", render::schema_json());
             Ok(())
+        }
+        Command::Bench { scenes, width, height, threads } => {
+            let size = match (width, height) {
+                (Some(w), Some(h)) => Some((w, h)),
+                (None, None) => None,
+                _ => return Err(Error::Options("bench takes both --width and --height, or neither".into())),
+            };
+            println!(
+                "{:<28} {:>8} {:>9} {:>9} {:>9} {:>12} {:>12} {:>14} {:>14}",
+                "scene", "blocks", "load s", "size", "render s", "primary", "all rays", "primary/s", "all rays/s"
+            );
+            for scene in scenes {
+                let m = render::bench::measure(&scene, size, threads)?;
+                println!(
+                    "{:<28} {:>8} {:>9.3} {:>9} {:>9.3} {:>12} {:>12} {:>14.0} {:>14.0}",
+                    scene.file_stem().map_or_else(|| scene.display().to_string(), |s| s.to_string_lossy().into()),
+                    m.blocks,
+                    m.load.as_secs_f64(),
+                    format!("{}x{}", m.width, m.height),
+                    m.render.as_secs_f64(),
+                    m.primary,
+                    m.rays,
+                    m.primary_per_second(),
+                    m.rays_per_second()
+                );
+            }
+            Ok(())
+        }
+        Command::Generate { kind, output } => {
+            let scene = match kind {
+                Generator::Sphereflake { level } => render::generate::sphereflake(level),
+                Generator::Grid { count, seed } => render::generate::grid(count, seed),
+            };
+            let text = render::generate::to_json(&scene);
+            match output {
+                Some(path) => std::fs::write(&path, text).map_err(|source| Error::Io { path, source }),
+                None => {
+                    print!("{text}");
+                    Ok(())
+                }
+            }
+        }
+        Command::ExportPov { scene, output, mask, width, height } => {
+            let mut world = render::load(&scene)?;
+            resize(&mut world, width, height)?;
+            let text = render::pov::export(&world, render::pov::PovOptions { mask });
+            match output {
+                Some(path) => std::fs::write(&path, text).map_err(|source| Error::Io { path, source }),
+                None => {
+                    print!("{text}");
+                    Ok(())
+                }
+            }
         }
     }
 }

@@ -25,6 +25,17 @@ pub fn all_scenes() -> Vec<PathBuf> {
     v
 }
 
+/// The committed benchmark scenes in `scenes/bench/`.
+pub fn bench_scenes() -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(root().join("scenes").join("bench"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    v.sort();
+    v
+}
+
 /// Runs `komplex` with `args` in `cwd`.
 pub fn komplex(cwd: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_komplex")).args(args).current_dir(cwd).output().expect("komplex runs")

@@ -4,6 +4,7 @@
 mod geom;
 mod support;
 
+mod bench;
 mod camera;
 mod cli;
 mod determinism;
@@ -13,3 +14,5 @@ mod interrupt;
 mod mutations;
 mod shading;
 mod trace;
+
+mod pov;

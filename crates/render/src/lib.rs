@@ -20,14 +20,17 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod bench;
 pub mod camera;
 pub mod check;
 mod error;
 pub mod exr;
 pub mod frame;
+pub mod generate;
 mod locate;
 mod output;
 pub mod png;
+pub mod pov;
 pub mod scene;
 pub mod shade;
 pub mod trace;

@@ -1,0 +1,76 @@
+//! `komplex bench`: throughput of the render loop on a scene (issue 6).
+//!
+//! One render gives both figures: primary rays (one per pixel, the
+//! anti-aliasing setting is forced to 1 so POV-Ray's `-A` renders compare)
+//! and all rays (primary, shadow, reflected, refracted) over the same
+//! wall-clock time of the render loop. Loading and building the kernel are
+//! timed apart.
+//!
+//! ```
+//! let dir = tempfile::tempdir().unwrap();
+//! let path = dir.path().join("ball.json");
+//! std::fs::write(&path, r#"{ "camera": { "eye": [0, 0, 5], "direction": [0, 0, -1] },
+//!                            "lights": [ { "position": [2, 2, 5] } ],
+//!                            "blocks": [ { "objects": [ { "sphere": {} } ] } ] }"#).unwrap();
+//! let m = render::bench::measure(&path, Some((8, 6)), Some(1)).unwrap();
+//! assert_eq!((m.blocks, m.primary), (1, 48));
+//! assert!(m.rays > m.primary); // shadow rays from the pixels that see the ball
+//! ```
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use crate::error::Error;
+
+/// What one benchmark run measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Measurement {
+    /// Blocks in the scene.
+    pub blocks: usize,
+    /// Reading, parsing and building the kernel (bounds, BVH).
+    pub load: Duration,
+    /// Image size.
+    pub width: u32,
+    /// Image size.
+    pub height: u32,
+    /// Primary rays cast (one per pixel).
+    pub primary: u64,
+    /// All rays cast.
+    pub rays: u64,
+    /// Wall-clock time of the render loop.
+    pub render: Duration,
+}
+
+impl Measurement {
+    /// Primary rays per second of render time.
+    pub fn primary_per_second(&self) -> f64 {
+        self.primary as f64 / self.render.as_secs_f64().max(1e-9)
+    }
+
+    /// All rays per second of render time.
+    pub fn rays_per_second(&self) -> f64 {
+        self.rays as f64 / self.render.as_secs_f64().max(1e-9)
+    }
+}
+
+/// Loads `path`, renders it once at `size` (default: the scene's) with
+/// `threads` workers and one ray per pixel, and reports the times.
+pub fn measure(path: &Path, size: Option<(u32, u32)>, threads: Option<usize>) -> Result<Measurement, Error> {
+    let start = Instant::now();
+    let mut world = crate::load(path)?;
+    let load = start.elapsed();
+    if let Some((w, h)) = size {
+        world.camera = world.camera.with_size(w, h).map_err(|e| Error::Options(format!("--width/--height: {e}")))?;
+    }
+    world.settings.samples = 1;
+    let (frame, stats) = crate::frame::render(&world, crate::frame::Options { threads }, &|| {})?;
+    Ok(Measurement {
+        blocks: world.complex.blocks().len(),
+        load,
+        width: frame.width,
+        height: frame.height,
+        primary: u64::from(frame.width) * u64::from(frame.height),
+        rays: stats.rays,
+        render: stats.elapsed,
+    })
+}

@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# Komplex vs POV-Ray 3.7 on the same scenes, the same image size and the
+# same number of threads (issue 6). For each scene: `komplex export-pov`
+# writes the POV-Ray version, POV-Ray renders it without anti-aliasing and
+# reports its trace time on stderr, `komplex bench` renders the JSON scene
+# once; the ratio is POV-Ray's trace time over ours (equal primary rays, so
+# it is the ratio of primary rays per second). Parse and load times are
+# excluded on both sides.
+#
+# Usage: scripts/bench-vs-povray.sh [--width W] [--height H] [--threads N] [SCENE...]
+# A SCENE is a JSON file, or `sphereflake-L` / `grid-N` for a scene
+# generated on the fly (`komplex generate`). Without scenes: the table, the
+# glass scene, sphereflake levels 3 and 4 and the 1,000-block grid. POV-Ray
+# takes minutes on larger grids (it tests every rotated box with every ray):
+# run those at a smaller size, e.g. `--width 160 --height 120 grid-10000`.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+width=640 height=480 threads=1
+scenes=()
+while [ $# -gt 0 ]; do
+    case "$1" in
+        --width) width="$2"; shift 2 ;;
+        --height) height="$2"; shift 2 ;;
+        --threads) threads="$2"; shift 2 ;;
+        -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
+        *) scenes+=("$1"); shift ;;
+    esac
+done
+
+command -v povray >/dev/null || { echo "povray is not installed (apt-get install povray)" >&2; exit 2; }
+cargo build --release --quiet
+komplex="${CARGO_TARGET_DIR:-target}/release/komplex"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+if [ ${#scenes[@]} -eq 0 ]; then
+    scenes=(scenes/table.json scenes/glass.json scenes/bench/sphereflake-3.json sphereflake-4 scenes/bench/grid-1000.json)
+fi
+for i in "${!scenes[@]}"; do
+    case "${scenes[$i]}" in
+        sphereflake-[0-9]*)
+            "$komplex" generate sphereflake --level "${scenes[$i]#sphereflake-}" -o "$work/${scenes[$i]}.json"
+            scenes[$i]="$work/${scenes[$i]}.json" ;;
+        grid-[0-9]*)
+            "$komplex" generate grid --count "${scenes[$i]#grid-}" -o "$work/${scenes[$i]}.json"
+            scenes[$i]="$work/${scenes[$i]}.json" ;;
+    esac
+done
+
+printf '%-16s %8s %10s %10s %14s %14s %14s %8s\n' \
+    scene blocks "pov s" "komplex s" "pov prim/s" "komplex prim/s" "komplex all/s" ratio
+for scene in "${scenes[@]}"; do
+    name=$(basename "$scene" .json)
+    "$komplex" export-pov "$scene" --width "$width" --height "$height" -o "$work/$name.pov"
+    # POV-Ray may only write next to its input: run it in the work directory.
+    (cd "$work" && povray -A +FN -D -P "+W$width" "+H$height" "+WT$threads" "+I$name.pov" "+O$name.png") \
+        2> "$work/$name.log" >/dev/null || { cat "$work/$name.log" >&2; exit 1; }
+    pov=$(sed -n 's/.*Trace Time:.*(\([0-9.]*\) seconds).*/\1/p' "$work/$name.log")
+    # The data line of `komplex bench`: blocks in column 2, render seconds in 5, all rays/s in 9.
+    read -r blocks ours all < <("$komplex" bench "$scene" --width "$width" --height "$height" --threads "$threads" |
+        awk 'NR == 2 { print $2, $5, $9 }')
+    awk -v n="$name" -v b="$blocks" -v p="$pov" -v o="$ours" -v a="$all" -v px=$((width * height)) 'BEGIN { if (p <= 0) p = 0.001
+        printf "%-16s %8d %10.3f %10.3f %14.0f %14.0f %14.0f %8.2f\n", n, b, p, o, px / p, px / o, a, p / o }'
+done
+echo "($width x $height, $threads thread(s); ratio = POV-Ray trace time / komplex render time, > 1: komplex is faster)"

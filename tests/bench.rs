@@ -1,0 +1,70 @@
+//! `komplex generate` and `komplex bench` (issue 6). No timings are
+//! asserted: only that the figures are there and consistent.
+
+use crate::support::{bench_scenes, komplex, komplex_ok, scene, tempdir};
+
+#[test]
+fn committed_bench_scenes_are_what_the_generators_write() {
+    let dir = tempdir();
+    let check = |args: &[&str], committed: &str| {
+        let out = dir.path().join("out.json");
+        let mut all = vec!["generate"];
+        all.extend_from_slice(args);
+        all.extend_from_slice(&["-o", out.to_str().unwrap()]);
+        komplex_ok(dir.path(), &all);
+        let want = std::fs::read_to_string(crate::support::root().join("scenes/bench").join(committed)).unwrap();
+        assert!(std::fs::read_to_string(&out).unwrap() == want, "{committed} differs from `komplex generate {args:?}`");
+    };
+    check(&["sphereflake", "--level", "3"], "sphereflake-3.json");
+    check(&["grid", "--count", "1000"], "grid-1000.json");
+    assert_eq!(bench_scenes().len(), 2, "a new bench scene needs a line above");
+}
+
+#[test]
+fn generated_scenes_have_the_requested_block_counts() {
+    let dir = tempdir();
+    // (arguments, blocks in the loaded scene): level L has 1 + 9 + … + 9^L spheres, plus the ground.
+    for (args, blocks) in [
+        (&["sphereflake", "--level", "0"][..], 2),
+        (&["sphereflake", "--level", "2"], 92),
+        (&["grid", "--count", "10"], 10),
+        (&["grid", "--count", "27", "--seed", "9"], 27),
+    ] {
+        let mut all = vec!["generate"];
+        all.extend_from_slice(args);
+        let out = komplex_ok(dir.path(), &all);
+        std::fs::write(dir.path().join("g.json"), &out.stdout).unwrap();
+        let check = komplex_ok(dir.path(), &["check", "g.json"]);
+        let summary = String::from_utf8_lossy(&check.stdout).to_string();
+        assert!(summary.contains(&format!("{blocks} block")), "{args:?}: {summary}");
+    }
+}
+
+#[test]
+fn bench_counts_primary_and_all_rays() {
+    let dir = tempdir();
+    let table = scene("table.json");
+    let csg = scene("csg.json");
+    let out = komplex_ok(
+        dir.path(),
+        &["bench", table.to_str().unwrap(), csg.to_str().unwrap(), "--width", "32", "--height", "24", "--threads", "1"],
+    );
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 3, "{text}");
+    for (line, name) in lines[1..].iter().zip(["table", "csg"]) {
+        let f: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!(f[0], name);
+        assert_eq!(f[3], "32x24");
+        let primary: u64 = f[5].parse().unwrap();
+        let all: u64 = f[6].parse().unwrap();
+        assert_eq!(primary, 32 * 24);
+        // Both scenes have lights and reflective surfaces: secondary rays exist.
+        assert!(all > primary, "{line}");
+        let (p, a): (f64, f64) = (f[7].parse().unwrap(), f[8].parse().unwrap());
+        assert!(p > 0.0 && a > p, "{line}");
+    }
+    // Half a size is an error, not a silent default.
+    let o = komplex(dir.path(), &["bench", table.to_str().unwrap(), "--width", "32"]);
+    assert_eq!(o.status.code(), Some(1));
+}
