@@ -90,11 +90,28 @@ fn nearly_singular_matrix_is_rejected() {
 /// the ray seemed to run inside the tube. Caught by the complex fuzz target
 /// (the block's box, which is right, culls the tube; the brute force did not).
 #[test]
-#[ignore = "open: the re-basing at the centre's foot rounds at the scale of |p - c| (quadric.rs)"]
 fn far_along_a_tube_axis_the_offset_survives() {
     for (offset, far) in [(3.0, 1e17), (296.0, 1.9018000000000003e78)] {
         let r = ray([0.0, offset, far], [1.0, 1.0, 1.0]);
         let set = Quadric::tube_z().intervals(&r, 0);
         assert!(set.is_empty(), "offset {offset} at {far:e}: {set:?}");
+    }
+    // Offset by 0.5 instead, the same line crosses the tube: with x = μ - 5,
+    // y = μ - 4.5 and μ = λ/√3, x² + y² = 1 gives μ = (19 ± √7)/4. `λ` is
+    // found as `λ₀ + μ` with `|λ₀| ≈ far`, so it is good to `ε·far` only (the
+    // rounding floor of the hit point's distance from the centre): far
+    // enough that the first solve's discriminant is noise, near enough that
+    // the chord (4.6) is far above that floor.
+    let (root7, root3) = (7f64.sqrt(), 3f64.sqrt());
+    let expected = [root3 * (19.0 - root7) / 4.0, root3 * (19.0 + root7) / 4.0];
+    for far in [1e9, 1e12] {
+        let set = Quadric::tube_z().intervals(&ray([-5.0, -4.5, far], [1.0, 1.0, 1.0]), 0);
+        let got: Vec<[f64; 2]> = set.as_slice().iter().map(|i| [i.enter.t, i.exit.t]).collect();
+        let tolerance = 8.0 * f64::EPSILON * far;
+        assert_eq!(got.len(), 1, "at {far:e}: {set:?}");
+        assert!(
+            (got[0][0] - expected[0]).abs() < tolerance && (got[0][1] - expected[1]).abs() < tolerance,
+            "at {far:e}: {got:?}"
+        );
     }
 }
