@@ -307,23 +307,25 @@ impl Quadric {
         let disc = difference_of_products(t, t, s, u);
         // `t² - su` is the same from any base, but from this one it is formed
         // from terms of size `t²` and `s·bᵀ(Ab + 2w)`, each rounded at `ε|b|`
-        // per component. Where the apex `-t/s` is far from the base compared
-        // with `|b|` (a ray passing a cylinder far along its axis) and those
-        // terms swamp the discriminant, the decision is rounding noise: solve
-        // again from the apex, where `t ≈ 0` and `u` is the ray's own offset.
-        if t.abs() > 0.5 * s.abs() * base.amax()
-            && disc.abs() < REBASE_MARGIN * (t * t + s.abs() * base.amax() * (g + self.w).amax())
-        {
-            if let Some(set) = self.intervals_from_apex(&r, &d, &lo, lambda0 - t / s, s, solid) {
+        // per component. Where those terms swamp the discriminant (a ray
+        // passing a cylinder far along its axis: `b` is far out, `t ≈ |A||b|`)
+        // the decision is rounding noise: solve again from the apex, where
+        // `t ≈ 0` and `u` is the ray's own offset. (`|b|` compared with the
+        // apex's distance does not tell: along the axis `A` ignores `b`.)
+        if t != 0.0 && disc.abs() < REBASE_MARGIN * (t * t + s.abs() * base.amax() * (g + self.w).amax()) {
+            if let Some(set) = self.intervals_from_apex(&r, &d, &lo, (lambda0, s, t), (&g, &ar), solid) {
                 return set;
             }
         }
         quadratic_set(s, t, u, disc, lambda0, solid)
     }
 
-    /// The quadratic re-based at `lambda1` (the apex of the first solve),
-    /// with `d = p - c` and its rounding error `lo` as before; `s` is the
-    /// same from any base. `None` where the apex or the new coefficients
+    /// The quadratic re-based at the apex `λ₁ = λ₀ - t/s` of the first solve
+    /// (`g = Ab + w` and `Ar` from it), with `d = p - c` and its rounding
+    /// error `lo` as before; `s` is the same from any base. `None` where the
+    /// gradient at the apex is not much smaller than at the foot (a bounded
+    /// solid near tangency: the apex is no nearer the solid's core, and the
+    /// first solve is as good), or where the apex or the new coefficients
     /// overflow (coordinates near the documented limit): the first solve
     /// stands then.
     #[cold]
@@ -333,11 +335,14 @@ impl Quadric {
         r: &Vector3<f64>,
         d: &Vector3<f64>,
         lo: &Vector3<f64>,
-        lambda1: f64,
-        s: f64,
+        (lambda0, s, t): (f64, f64, f64),
+        (g, ar): (&Vector3<f64>, &Vector3<f64>),
         solid: u32,
     ) -> Option<IntervalSet> {
-        if !lambda1.is_finite() {
+        let mu = -t / s;
+        let lambda1 = lambda0 + mu;
+        let g_apex = Vector3::new(mu.mul_add(ar.x, g.x), mu.mul_add(ar.y, g.y), mu.mul_add(ar.z, g.z));
+        if !(lambda1.is_finite() && g_apex.amax() < 0.25 * g.amax()) {
             return None;
         }
         let base = Vector3::new(lambda1.mul_add(r.x, d.x), lambda1.mul_add(r.y, d.y), lambda1.mul_add(r.z, d.z));

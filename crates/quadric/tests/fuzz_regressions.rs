@@ -96,6 +96,12 @@ fn far_along_a_tube_axis_the_offset_survives() {
         let set = Quadric::tube_z().intervals(&r, 0);
         assert!(set.is_empty(), "offset {offset} at {far:e}: {set:?}");
     }
+    // Found by `oracle::far_along_a_cylinder_axis_the_offset_decides`: y = -1.245
+    // all along. The foot's `|b|` is its axis coordinate, which `A` ignores, so
+    // comparing the apex's distance with `|b|` did not see the need to re-base.
+    let r = ray([0.0, -1.245108159030882, 2.061082366195932e16], [0.6244329308725833, 0.0, 0.21787478454700887]);
+    let set = Quadric::tube_z().intervals(&r, 0);
+    assert!(set.is_empty(), "{set:?}");
     // Offset by 0.5 instead, the same line crosses the tube: with x = μ - 5,
     // y = μ - 4.5 and μ = λ/√3, x² + y² = 1 gives μ = (19 ± √7)/4. `λ` is
     // found as `λ₀ + μ` with `|λ₀| ≈ far`, so it is good to `ε·far` only (the
