@@ -121,3 +121,26 @@ fn far_along_a_tube_axis_the_offset_survives() {
         );
     }
 }
+
+/// The same far along a *rotated* cylinder's axis: there `A` is full, and
+/// `u = bᵀ(Ab + 2w) + k` at any base `b` far along the axis is formed from
+/// `Ab` rounded at `ε|A||b|`, times `|b|`: an error of `ε|b|²`, even at the
+/// apex. From 10⁹ along the axis (origin offset 0.5, so it starts inside and
+/// leaves after √0.75 across the axis, at λ = 0.904) the exit came out at
+/// 1.8 before the apex re-basing and 3.6 after; from 10⁶ it is already off
+/// by 8e-6. A fix would re-centre along `A`'s null
+/// direction `n` (the axis) before forming `u`: `d' = d - (n·d)n` in
+/// double-double, small like the ray's offset.
+#[test]
+#[ignore = "open: rotated unbounded quadrics far along their axis (u is formed at ε|b|², quadric.rs)"]
+fn far_along_a_rotated_tube_axis_the_exit_is_found() {
+    let m = Transform::rotate_x_degrees(30.0).expect("finite");
+    let tube = Quadric::tube_z().transformed(&m);
+    let (axis, across) = (m.apply_vector(&Vector3::z()), m.apply_vector(&Vector3::y()));
+    let origin = Point3::from(axis * 1e9 + across * 0.5);
+    let dir = Vector3::x() + axis * 0.3;
+    let set = tube.intervals(&Ray::new(origin, dir).expect("valid ray"), 0);
+    let expected = 0.75f64.sqrt() * dir.norm();
+    let exits: Vec<f64> = set.as_slice().iter().map(|i| i.exit.t).collect();
+    assert!(exits.len() == 1 && (exits[0] - expected).abs() < 1e-5, "{set:?} vs exit {expected}");
+}
