@@ -348,7 +348,7 @@ impl Quadric {
         let base = Vector3::new(lambda1.mul_add(r.x, d.x), lambda1.mul_add(r.y, d.y), lambda1.mul_add(r.z, d.z));
         let rw = r.dot(&self.w);
         let t = if s.abs() >= self.flat {
-            (self.a * r).dot(&base) + (rw + (self.a * r).dot(lo))
+            ar.dot(&base) + (rw + ar.dot(lo))
         } else {
             self.nearly_flat_s_t(r, &base, lo, rw).1
         };
@@ -381,9 +381,9 @@ impl Quadric {
 }
 
 /// Below this fraction of the size of the terms it is formed from, the
-/// discriminant at the foot of the perpendicular is not trusted where the
-/// apex is far from it (`Quadric::intervals`); well above the few ulps
-/// those terms are rounded to, so that every case that needs it is caught.
+/// discriminant at the foot of the perpendicular is not trusted
+/// (`Quadric::intervals`); well above the few ulps those terms are rounded
+/// to, so that every case that needs the apex is caught.
 const REBASE_MARGIN: f64 = 1.0 / (1u64 << 40) as f64;
 
 /// Whether the symmetric `m` is positive semi-definite, decided exactly: all
