@@ -302,10 +302,60 @@ impl Quadric {
         let g = self.a * base + self.w;
         let u = base.dot(&(g + self.w)) + self.k + 2.0 * lo.dot(&g);
         if s == 0.0 {
-            linear_set(t, u, lambda0, solid)
-        } else {
-            quadratic_set(s, t, u, difference_of_products(t, t, s, u), lambda0, solid)
+            return linear_set(t, u, lambda0, solid);
         }
+        let disc = difference_of_products(t, t, s, u);
+        // `t² - su` is the same from any base, but from this one it is formed
+        // from terms of size `t²` and `s·bᵀ(Ab + 2w)`, each rounded at `ε|b|`
+        // per component. Where those terms swamp the discriminant (a ray
+        // passing a cylinder far along its axis: `b` is far out, `t ≈ |A||b|`)
+        // the decision is rounding noise: solve again from the apex, where
+        // `t ≈ 0` and `u` is the ray's own offset. (`|b|` compared with the
+        // apex's distance does not tell: along the axis `A` ignores `b`.)
+        if t != 0.0 && disc.abs() < REBASE_MARGIN * (t * t + s.abs() * base.amax() * (g + self.w).amax()) {
+            if let Some(set) = self.intervals_from_apex(&r, &d, &lo, (lambda0, s, t), (&g, &ar), solid) {
+                return set;
+            }
+        }
+        quadratic_set(s, t, u, disc, lambda0, solid)
+    }
+
+    /// The quadratic re-based at the apex `λ₁ = λ₀ - t/s` of the first solve
+    /// (`g = Ab + w` and `Ar` from it), with `d = p - c` and its rounding
+    /// error `lo` as before; `s` is the same from any base. `None` where the
+    /// gradient at the apex is not much smaller than at the foot (a bounded
+    /// solid near tangency: the apex is no nearer the solid's core, and the
+    /// first solve is as good), or where the apex or the new coefficients
+    /// overflow (coordinates near the documented limit): the first solve
+    /// stands then.
+    #[cold]
+    #[inline(never)]
+    fn intervals_from_apex(
+        &self,
+        r: &Vector3<f64>,
+        d: &Vector3<f64>,
+        lo: &Vector3<f64>,
+        (lambda0, s, t): (f64, f64, f64),
+        (g, ar): (&Vector3<f64>, &Vector3<f64>),
+        solid: u32,
+    ) -> Option<IntervalSet> {
+        let mu = -t / s;
+        let lambda1 = lambda0 + mu;
+        let g_apex = Vector3::new(mu.mul_add(ar.x, g.x), mu.mul_add(ar.y, g.y), mu.mul_add(ar.z, g.z));
+        if !(lambda1.is_finite() && g_apex.amax() < 0.25 * g.amax()) {
+            return None;
+        }
+        let base = Vector3::new(lambda1.mul_add(r.x, d.x), lambda1.mul_add(r.y, d.y), lambda1.mul_add(r.z, d.z));
+        let rw = r.dot(&self.w);
+        let t = if s.abs() >= self.flat {
+            ar.dot(&base) + (rw + ar.dot(lo))
+        } else {
+            self.nearly_flat_s_t(r, &base, lo, rw).1
+        };
+        let g = self.a * base + self.w;
+        let u = base.dot(&(g + self.w)) + self.k + 2.0 * lo.dot(&g);
+        let disc = difference_of_products(t, t, s, u);
+        disc.is_finite().then(|| quadratic_set(s, t, u, disc, lambda1, solid))
     }
 
     /// `s` and `t` for a ray nearly along a direction in which the quadric is
@@ -329,6 +379,12 @@ impl Quadric {
         (s, t)
     }
 }
+
+/// Below this fraction of the size of the terms it is formed from, the
+/// discriminant at the foot of the perpendicular is not trusted
+/// (`Quadric::intervals`); well above the few ulps those terms are rounded
+/// to, so that every case that needs the apex is caught.
+const REBASE_MARGIN: f64 = 1.0 / (1u64 << 40) as f64;
 
 /// Whether the symmetric `m` is positive semi-definite, decided exactly: all
 /// seven principal minors are `>= 0` (for a symmetric matrix this is

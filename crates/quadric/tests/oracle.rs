@@ -663,3 +663,43 @@ fn reversal_of_a_ray_in_the_surface() {
     assert_eq!(cone.intervals(&ray, 0), IntervalSet::from_interval(Bound::free(0.0), Bound::free(INF)));
     reversal_mirrors(cone, ray, 11.643963013486482, &[]).expect("tolerated: f is 0 up to rounding all along");
 }
+
+proptest! {
+    /// Far along a cylinder's axis, whether and where the ray crosses it is
+    /// decided by its offset across the axis alone, whatever the distance:
+    /// for `tube_z` the line's `xy` trace is exact small numbers, so its
+    /// distance from the axis and its crossings are computed here directly.
+    /// Only the `λ` of a crossing is limited, to `ε` of the distance.
+    #[test]
+    fn far_along_a_cylinder_axis_the_offset_decides(
+        origin in (-3.0f64..3.0, -3.0f64..3.0),
+        dir in (-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0),
+        far in 1e3f64..1e17,
+    ) {
+        let (px, py) = origin;
+        let (dx, dy, dz) = dir;
+        prop_assume!(dx.abs().max(dy.abs()) > 1e-3);
+        let r = Ray::new(Point3::new(px, py, far), Vector3::new(dx, dy, dz)).expect("nonzero");
+        let v = r.direction();
+        // In `xy`: p + λv, |·|² = 1 ⇔ aλ² + 2bλ + c = 0.
+        let (a, b, c) = (v.x * v.x + v.y * v.y, px * v.x + py * v.y, px * px + py * py - 1.0);
+        let miss = (px * v.y - py * v.x).powi(2) / a - 1.0; // squared distance from the axis, minus 1
+        prop_assume!(miss.abs() > 1e-9);
+        let set = quadric::Quadric::tube_z().intervals(&r, 0);
+        if miss > 0.0 {
+            prop_assert!(set.is_empty(), "{r:?}: {set:?}");
+        } else {
+            let h = (b * b - a * c).sqrt();
+            let (l1, l2) = ((-b - h) / a, (-b + h) / a);
+            let tolerance = 16.0 * EPS * far + 1e-9;
+            if l2 <= tolerance {
+                prop_assert!(set.as_slice().iter().all(|i| i.exit.t <= 2.0 * tolerance), "{r:?}: {set:?}");
+            } else {
+                prop_assert_eq!(set.len(), 1, "{:?}: {:?}", r, set);
+                let i = set.as_slice()[0];
+                prop_assert!((i.enter.t - l1.max(0.0)).abs() <= tolerance, "{r:?}: {set:?} vs {l1}");
+                prop_assert!((i.exit.t - l2).abs() <= tolerance, "{r:?}: {set:?} vs {l2}");
+            }
+        }
+    }
+}
