@@ -35,3 +35,17 @@ fuzz-kernel seconds="30":
         cargo fuzz run --sanitizer none --debug-assertions $t fuzz/corpus/$t fuzz/seeds/$t -- \
             -max_total_time={{ seconds }} -print_final_stats=1 || exit 1; \
     done
+
+# Fuzz scene loading (`fuzz/fuzz_targets/scene.rs`): arbitrary bytes through
+# text -> SceneFile -> World, then camera rays, `cast_ray` and shading; same
+# flags as fuzz-kernel, plus the JSON dictionary fuzz/scene.dict. The seeds
+# are scenes/*.json (copied in first) and the committed fuzz/seeds/scene/.
+fuzz-scene seconds="60":
+    cp scenes/*.json fuzz/seeds/scene/
+    mkdir -p fuzz/corpus/scene
+    RUSTFLAGS="{{ if arch() == "x86_64" { "-Ctarget-feature=+fma" } else { "" } }}" \
+    cargo fuzz run --sanitizer none --debug-assertions scene fuzz/corpus/scene fuzz/seeds/scene -- \
+        -dict=fuzz/scene.dict -max_total_time={{ seconds }} -print_final_stats=1
+
+# Every fuzz target, `seconds` each (the documented run: 60).
+fuzz seconds="60": (fuzz-kernel seconds) (fuzz-scene seconds)

@@ -2,7 +2,7 @@
 //! shadows from opaque and transparent blockers.
 
 use crate::geom::{add, dot, mul, prod, sub, unit, Cam, V};
-use crate::support::{rendered, tempdir, write_scene, Exr};
+use crate::support::{render_frame, rendered, tempdir, world, write_scene, Exr};
 
 /// Parameters `t` where `e + t d` (d unit) crosses the sphere, if it does clearly;
 /// `Err(())` when too close to tangent to call.
@@ -393,4 +393,25 @@ fn one_medium_attenuates_a_shadow_once() {
 #[test]
 fn two_media_attenuate_a_shadow_once_each() {
     two_ball_shadow(false);
+}
+
+/// Found by fuzzing (`fuzz/fuzz_targets/scene.rs`): a light of 1e300 on a
+/// diffuse reflectance of 1e300 overflows to ∞, and a zero weight times that
+/// ∞ (here `reflect` in red) made a NaN pixel. A zero factor is no light.
+#[test]
+fn overflowing_colours_give_infinity_not_nan() {
+    // The camera inside a ball of radius 10 looks along -z at its wall; the
+    // light at (0, 0, 1) shines on it head on, unshadowed. Red: diffuse
+    // 1e300 × 1e300 overflows; green: only the mirror (weight 1) over a wall
+    // with no green; blue: nothing.
+    let json = r#"{ "camera": { "eye": [0, 0, 0], "direction": [0, 0, -1], "width": 3, "height": 3 },
+        "lights": [ { "position": [0, 0, 1], "color": [1e300, 1e300, 1e300] } ],
+        "materials": { "m": { "diffuse": [1e300, 0, 0], "reflect": [0, 1, 0] } },
+        "blocks": [ { "material": "m", "objects": [ { "sphere": { "radius": 10 } } ] } ] }"#;
+    let dir = tempdir();
+    let frame = render_frame(&world(&write_scene(dir.path(), "overflow.json", json), None));
+    for p in &frame.pixels {
+        assert!(p.rgb.iter().all(|c| !c.is_nan()), "{p:?}");
+    }
+    assert_eq!(frame.at(1, 1).rgb, [f32::INFINITY, 0.0, 0.0]);
 }

@@ -60,6 +60,14 @@ pub struct Shader<'w> {
     transparent: bool,
 }
 
+/// `a ⊙ b`, where a zero factor gives zero even against infinity. Colours
+/// and weights are finite and non-negative, but their products can overflow
+/// (a light of 1e300 on a diffuse 1e300), and `0 · ∞` would be a NaN pixel;
+/// no light (or a zero weight) is no light, however bright the other factor.
+fn weigh(a: &Rgb, b: &Rgb) -> Rgb {
+    a.zip_map(b, |x, y| if x == 0.0 || y == 0.0 { 0.0 } else { x * y })
+}
+
 fn is_zero(c: &Rgb) -> bool {
     c.iter().all(|x| *x == 0.0)
 }
@@ -148,7 +156,7 @@ impl<'w> Shader<'w> {
         let v = -ray.direction();
         let n = facing_normal(&e.normal, &ray.direction());
         let ambient = Vector3::from(world.settings.ambient);
-        let mut c = mat.ambient.component_mul(&ambient);
+        let mut c = weigh(&mat.ambient, &ambient);
 
         let wants_diffuse = !is_zero(&mat.diffuse);
         let wants_specular = !is_zero(&mat.specular);
@@ -168,7 +176,7 @@ impl<'w> Shader<'w> {
                 if is_zero(&pass) {
                     continue;
                 }
-                let mut lc = mat.diffuse.component_mul(&light.diffuse) * nl;
+                let mut lc = weigh(&mat.diffuse, &light.diffuse) * nl;
                 if wants_specular {
                     let s = match mat.model {
                         Model::Phong => (2.0 * nl * n - l).dot(&v),
@@ -183,10 +191,10 @@ impl<'w> Shader<'w> {
                         }
                     };
                     if s > 0.0 {
-                        lc += mat.specular.component_mul(&light.specular) * s.powf(mat.shininess);
+                        lc += weigh(&weigh(&mat.specular, &light.specular), &Vector3::repeat(s.powf(mat.shininess)));
                     }
                 }
-                c += lc.component_mul(&pass);
+                c += weigh(&lc, &pass);
             }
         }
 
@@ -205,7 +213,7 @@ impl<'w> Shader<'w> {
                 } else {
                     let dir = -eta * v + (eta * cos_i - (1.0 - sin2_t).sqrt()) * n;
                     if let Ok(r) = Ray::new(e.point, dir) {
-                        c += mat.transmit.component_mul(&self.trace(&r, depth + 1, scratch));
+                        c += weigh(&mat.transmit, &self.trace(&r, depth + 1, scratch));
                     }
                 }
             }
@@ -213,7 +221,7 @@ impl<'w> Shader<'w> {
         if !is_zero(&kr) {
             let dir = 2.0 * cos_i * n - v;
             if let Ok(r) = Ray::new(e.point, dir) {
-                c += kr.component_mul(&self.trace(&r, depth + 1, scratch));
+                c += weigh(&kr, &self.trace(&r, depth + 1, scratch));
             }
         }
         c
@@ -250,7 +258,7 @@ impl<'w> Shader<'w> {
                         return Vector3::zeros();
                     }
                     if previous != Some(block.material()) {
-                        pass.component_mul_assign(&self.world.block_material(id).transmit);
+                        pass = weigh(&pass, &self.world.block_material(id).transmit);
                         if is_zero(&pass) {
                             return pass;
                         }
