@@ -51,6 +51,13 @@ pub struct Scratch {
     pub rays: u64,
 }
 
+/// Secondary rays whose colour would be scaled by less than this (the
+/// product of the `reflect`/`transmit` factors along their path, largest
+/// channel) are not followed: adaptive depth control (Hall and Greenberg,
+/// 1983). Without it a scene mixing mirrors and glass casts a ray tree that
+/// grows by about 1.6x per bounce up to `max_depth`.
+pub const MIN_PATH_WEIGHT: f64 = 1e-4;
+
 /// Shades rays against one world.
 #[derive(Clone, Copy, Debug)]
 pub struct Shader<'w> {
@@ -86,16 +93,22 @@ impl<'w> Shader<'w> {
             Some(e) => {
                 let n = facing_normal(&e.normal, &ray.direction());
                 let surface = Surface { t: e.t, normal: n, block: e.block, solid: e.solid };
-                (self.shade(ray, &e, 0, scratch), Some(surface))
+                (self.shade(ray, &e, 0, 1.0, scratch), Some(surface))
             }
         }
     }
 
     /// The colour seen along `ray` at recursion depth `depth`.
     pub fn trace(&self, ray: &Ray, depth: u32, scratch: &mut Scratch) -> Rgb {
+        self.trace_weighted(ray, depth, 1.0, scratch)
+    }
+
+    /// [`Shader::trace`] for a ray whose colour will be scaled by at most
+    /// `weight` (the product of the `reflect`/`transmit` factors on its path).
+    fn trace_weighted(&self, ray: &Ray, depth: u32, weight: f64, scratch: &mut Scratch) -> Rgb {
         match self.first_event(ray, scratch) {
             None => self.background(),
-            Some(e) => self.shade(ray, &e, depth, scratch),
+            Some(e) => self.shade(ray, &e, depth, weight, scratch),
         }
     }
 
@@ -150,7 +163,7 @@ impl<'w> Shader<'w> {
         }
     }
 
-    fn shade(&self, ray: &Ray, e: &Event, depth: u32, scratch: &mut Scratch) -> Rgb {
+    fn shade(&self, ray: &Ray, e: &Event, depth: u32, weight: f64, scratch: &mut Scratch) -> Rgb {
         let world = self.world;
         let mat = world.surface_material(e.block, e.solid);
         let v = -ray.direction();
@@ -212,16 +225,18 @@ impl<'w> Shader<'w> {
                     kr += mat.transmit;
                 } else {
                     let dir = -eta * v + (eta * cos_i - (1.0 - sin2_t).sqrt()) * n;
-                    if let Ok(r) = Ray::new(e.point, dir) {
-                        c += weigh(&mat.transmit, &self.trace(&r, depth + 1, scratch));
+                    let w = weight * mat.transmit.max();
+                    if let (true, Ok(r)) = (w >= MIN_PATH_WEIGHT, Ray::new(e.point, dir)) {
+                        c += weigh(&mat.transmit, &self.trace_weighted(&r, depth + 1, w, scratch));
                     }
                 }
             }
         }
-        if !is_zero(&kr) {
+        let w = weight * kr.max();
+        if !is_zero(&kr) && w >= MIN_PATH_WEIGHT {
             let dir = 2.0 * cos_i * n - v;
             if let Ok(r) = Ray::new(e.point, dir) {
-                c += weigh(&kr, &self.trace(&r, depth + 1, scratch));
+                c += weigh(&kr, &self.trace_weighted(&r, depth + 1, w, scratch));
             }
         }
         c
