@@ -270,6 +270,56 @@ impl Complex {
         self.cast_general(ray, max_t)
     }
 
+    /// Whether anything stops the ray in `(ε, max_t]`: exactly
+    /// `self.cast_ray(ray, max_t).is_some()`, but for opaque complexes an
+    /// any-hit query: the first block entry found within `max_t` ends the
+    /// search, with no nearest-hit ordering and no normal. Meant for shadow
+    /// rays, which need only a yes or no.
+    pub fn occluded(&self, ray: &Ray, max_t: f64) -> bool {
+        if max_t.partial_cmp(&self.epsilon) != Some(core::cmp::Ordering::Greater) {
+            return false;
+        }
+        if self.any_transparent {
+            return self.cast_general(ray, max_t).is_some();
+        }
+        let eps = self.epsilon;
+        let rb = RayBoxes::new(ray);
+        // Inside the union just after ε (the same probe as `cast_opaque`): the
+        // answer is whether the run ends within `max_t`.
+        let mut run_end = eps;
+        let mut probe = |spans: &Spans| {
+            for iv in spans.as_slice() {
+                if iv.enter.t <= eps && eps < iv.exit.t {
+                    run_end = run_end.max(iv.exit.t);
+                }
+            }
+        };
+        let mut t_probe = eps;
+        self.bvh.traverse(&rb, eps, &mut t_probe, |k, _, _| probe(&self.kernel.spans(k, ray, &self.blocks)));
+        for i in self.unbounded_crossed(&rb, eps, eps) {
+            probe(&self.blocks[i as usize].spans(ray));
+        }
+        if run_end > eps {
+            return self.run_exit(ray, &rb, run_end, max_t).is_some();
+        }
+        // Outside: any entry in `(ε, max_t]` is a hit (the nearest entry is
+        // one, and every entry is at or after it).
+        let enters = |spans: &Spans| spans.as_slice().iter().any(|iv| iv.enter.t > eps && iv.enter.t <= max_t);
+        if self.unbounded_crossed(&rb, eps, max_t).any(|i| enters(&self.blocks[i as usize].spans(ray))) {
+            return true;
+        }
+        let mut found = false;
+        let mut t_max = max_t;
+        self.bvh.traverse(&rb, eps, &mut t_max, |k, _, t_max| {
+            if enters(&self.kernel.spans(k, ray, &self.blocks)) {
+                found = true;
+                // Cuts off every remaining box.
+                *t_max = f64::NEG_INFINITY;
+            }
+        });
+        found
+    }
+
     /// `cast_ray` with transparent blocks: walks the ends of the blocks'
     /// intervals in order from ε, keeping the owner, until the owner changes
     /// visibly. Each step is one front-to-back BVH query for the next end

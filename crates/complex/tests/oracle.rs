@@ -184,6 +184,15 @@ proptest! {
                 prop_assert_eq!(c.cast_ray(ray, h.t).map(|x| x.t), Some(h.t));
             }
 
+            // occluded is "the first visible event is within max_t".
+            let mut limits = vec![f64::INFINITY, 0.5, 3.0, eps];
+            if let Some(t) = first {
+                limits.extend([t, 0.5 * t, 2.0 * t, t * (1.0 - f64::EPSILON)]);
+            }
+            for m in limits {
+                prop_assert_eq!(c.occluded(ray, m), first.is_some_and(|t| t <= m), "max_t = {}", m);
+            }
+
             // Sampled membership: per-block sets, partition owner, contains_point.
             let horizon = brute.last().map_or(10.0, |e| e.0 + 2.0).min(60.0);
             for k in 0..64 {
@@ -264,6 +273,9 @@ proptest! {
             prop_assert_eq!(hit.map(|h| h.t), brute.map(|b| b.0));
             if let (Some(h), Some((_, before, after))) = (hit, brute) {
                 prop_assert_eq!(Some(h.block), if h.entering { after } else { before });
+            }
+            for m in [f64::INFINITY, 1.0, 4.0, brute.map_or(1.0, |b| b.0)] {
+                prop_assert_eq!(c.occluded(ray, m), brute.is_some_and(|b| b.0 <= m), "max_t = {}", m);
             }
             let events: Vec<_> = c.partition(ray).events.iter().map(|e| (e.t, e.before, e.after)).collect();
             prop_assert_eq!(events, brute_events(&c, ray));

@@ -253,10 +253,8 @@ impl<'w> Shader<'w> {
         let Ok(ray) = Ray::new(*x, *l) else { return one };
         scratch.rays += 1;
         if !self.transparent {
-            return match self.complex.cast_ray(&ray, dist) {
-                Some(_) => Vector3::zeros(),
-                None => one,
-            };
+            // Any blocker will do: an any-hit query, no nearest-hit ordering.
+            return if self.complex.occluded(&ray, dist) { Vector3::zeros() } else { one };
         }
         self.complex.partition_into(&ray, &mut scratch.partition);
         let mut pass = one;
