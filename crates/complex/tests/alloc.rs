@@ -1,4 +1,4 @@
-//! `cast_ray` never allocates, with or without transparent blocks.
+//! `cast_ray` and `occluded` never allocate, with or without transparent blocks.
 
 use complex::{Block, Complex, ComplexOptions, MaterialKey, Opacity};
 use proptest::prelude::*;
@@ -48,5 +48,16 @@ fn cast_ray_does_not_allocate() {
         let info = allocation_counter::measure(|| n = hits(&c, &rays));
         assert!(n > 50, "the scene should be hit often, got {n}");
         assert_eq!(info.count_total, 0, "cast_ray allocated (transparent every {transparent_every})");
+    }
+}
+
+#[test]
+fn occluded_does_not_allocate() {
+    for transparent_every in [0, 4] {
+        let (c, rays) = scene(transparent_every);
+        let mut n = 0;
+        let info = allocation_counter::measure(|| n = rays.iter().filter(|r| c.occluded(r, 8.0)).count());
+        assert!(n > 50, "the scene should block often, got {n}");
+        assert_eq!(info.count_total, 0, "occluded allocated (transparent every {transparent_every})");
     }
 }
