@@ -22,3 +22,4 @@ pub use bounds::Aabb;
 pub use complex::{Complex, ComplexOptions, Hit, DEFAULT_RELATIVE_EPSILON};
 pub use error::ComplexError;
 pub use partition::{Event, Partition, Segment, Surface};
+pub use quadric::Precision;
