@@ -373,39 +373,34 @@ impl Complex {
         }
         let eps = self.epsilon;
         let rb = RayBoxes::new(ray);
-        // Inside the union just after ε (the same probe as `cast_opaque`): the
-        // answer is whether the run ends within `max_t`.
+        // One walk answers both questions: is the ray inside the union just
+        // after ε (then the answer is whether that run ends within `max_t`),
+        // and does it enter a block in `(ε, max_t]` (then, from outside, it
+        // is stopped: the nearest entry is one, and every entry is at or
+        // after it). Once an entry is found only the inside-probe is left:
+        // `t_max = ε` keeps just the boxes that hold the ray at ε.
         let mut run_end = eps;
-        let mut probe = |spans: &Spans| {
+        let mut found = false;
+        let mut look = |spans: &Spans, t_max: &mut f64| {
             for iv in spans.as_slice() {
-                if iv.enter.t <= eps && eps < iv.exit.t {
-                    run_end = run_end.max(iv.exit.t);
+                if iv.enter.t <= eps {
+                    if eps < iv.exit.t {
+                        run_end = run_end.max(iv.exit.t);
+                    }
+                } else if iv.enter.t <= max_t {
+                    found = true;
+                    *t_max = eps;
                 }
             }
         };
-        let mut t_probe = eps;
-        self.bvh.traverse(&rb, eps, &mut t_probe, |k, _, _| probe(&self.slot_spans(k, ray, &rb)));
-        for i in self.unbounded_crossed(&rb, eps, eps) {
-            probe(&self.block_spans(i, ray, &rb));
+        let mut t_max = max_t;
+        for i in self.unbounded_crossed(&rb, eps, max_t) {
+            look(&self.block_spans(i, ray, &rb), &mut t_max);
         }
+        self.bvh.traverse(&rb, eps, &mut t_max, |k, _, t_max| look(&self.slot_spans(k, ray, &rb), t_max));
         if run_end > eps {
             return self.run_exit(ray, &rb, run_end, max_t).is_some();
         }
-        // Outside: any entry in `(ε, max_t]` is a hit (the nearest entry is
-        // one, and every entry is at or after it).
-        let enters = |spans: &Spans| spans.as_slice().iter().any(|iv| iv.enter.t > eps && iv.enter.t <= max_t);
-        if self.unbounded_crossed(&rb, eps, max_t).any(|i| enters(&self.block_spans(i, ray, &rb))) {
-            return true;
-        }
-        let mut found = false;
-        let mut t_max = max_t;
-        self.bvh.traverse(&rb, eps, &mut t_max, |k, _, t_max| {
-            if enters(&self.slot_spans(k, ray, &rb)) {
-                found = true;
-                // Cuts off every remaining box.
-                *t_max = f64::NEG_INFINITY;
-            }
-        });
         found
     }
 
@@ -517,33 +512,27 @@ impl Complex {
     fn cast_opaque(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
         let eps = self.epsilon;
         let rb = RayBoxes::new(ray);
-        // Is the ray inside the union just after ε? Then the answer is the end
-        // of the run of overlapping intervals it is in.
+        // One front-to-back walk with early exit finds the nearest entry
+        // after ε (lowest block id on ties: the owner after the event) and
+        // whether the ray is inside the union just after ε: then the answer
+        // is the end of the run of overlapping intervals it is in. The boxes
+        // holding the ray at ε enter at or before ε, before any entry found,
+        // so the shrinking `t_max` never cuts them off.
         let mut run_end = eps;
-        let mut probe = |_: u32, spans: &Spans| {
-            for iv in spans.as_slice() {
-                if iv.enter.t <= eps && eps < iv.exit.t {
-                    run_end = run_end.max(iv.exit.t);
-                }
-            }
-        };
-        let mut t_probe = eps;
-        self.bvh.traverse(&rb, eps, &mut t_probe, |k, _, _| {
-            let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
-            probe(i, &sp)
-        });
-        for i in self.unbounded_crossed(&rb, eps, eps) {
-            probe(i, &self.block_spans(i, ray, &rb));
-        }
-        if run_end > eps {
-            return self.run_exit(ray, &rb, run_end, max_t);
-        }
-        // Outside: the nearest entry after ε, lowest block id on ties (the
-        // owner after the event).
         // `(t, block, solid, BVH slot)`.
         let mut best: Option<(f64, u32, u32, Option<u32>)> = None;
         let mut consider = |i: u32, k: Option<u32>, spans: &Spans, t_max: &mut f64| {
-            if let Some(iv) = spans.as_slice().iter().find(|iv| iv.enter.t > eps) {
+            let mut entry = None;
+            for iv in spans.as_slice() {
+                if iv.enter.t <= eps {
+                    if eps < iv.exit.t {
+                        run_end = run_end.max(iv.exit.t);
+                    }
+                } else if entry.is_none() && iv.enter.t > eps {
+                    entry = Some(iv);
+                }
+            }
+            if let Some(iv) = entry {
                 let t = iv.enter.t;
                 if t <= *t_max && best.map_or(true, |(bt, bi, _, _)| t < bt || (t == bt && i < bi)) {
                     best = Some((t, i, iv.enter.solid, k));
@@ -559,6 +548,9 @@ impl Complex {
             let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
             consider(i, Some(k), &sp, t_max)
         });
+        if run_end > eps {
+            return self.run_exit(ray, &rb, run_end, max_t);
+        }
         let (t, block, solid, slot) = best?;
         // The normal from the packed copy of the solid, which the test just
         // read (the block's own copy is likely out of the caches by now).
