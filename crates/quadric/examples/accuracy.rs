@@ -13,10 +13,6 @@
 //!   difference of products and the stable root pair;
 //! - *ours*: `Quadric::intervals`.
 
-#[path = "../tests/support/reference.rs"]
-#[allow(dead_code)]
-mod reference;
-
 use std::hint::black_box;
 use std::time::Instant;
 

@@ -1,5 +1,5 @@
 //! Accuracy of `Quadric::intervals` (and `HalfSpace::intervals`) against the
-//! high-precision reference in `support/reference.rs` (exact dyadic
+//! high-precision reference of the `reference` crate (exact dyadic
 //! arithmetic, roots to 256 bits): the bound stated in `docs/quadric.md` §8.
 //!
 //! With `x` the exact crossing and `U = ulp(max(|x|∞, |x - c|∞))` the spacing
@@ -18,10 +18,6 @@
 //!
 //! The rounding floor itself (the exact crossing rounded to doubles) reaches
 //! about `0.87 U`.
-
-#[path = "support/reference.rs"]
-#[allow(dead_code)]
-mod reference;
 
 use reference::{median_max, other_shapes, unit_sphere, Judge, Rng, Scene, Shape, Tally};
 

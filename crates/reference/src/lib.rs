@@ -1,5 +1,8 @@
-//! High-precision reference for ray–quadric roots, shared by the accuracy
-//! test (`tests/accuracy.rs`) and the measurement (`examples/accuracy.rs`).
+//! # reference — the high-precision reference intersector of Komplex
+//!
+//! Used by the accuracy and stress tests of `quadric` and `complex` and by
+//! the accuracy measurements (`quadric`'s `examples/accuracy.rs`); never by
+//! the caster itself (`publish = false`).
 //!
 //! The true solid is the one the stored doubles define: `f(x) = (x-c)ᵀA(x-c)
 //! + 2wᵀ(x-c) + k` with `c, A, w, k` from [`Quadric::local_parts`], and the
@@ -8,6 +11,8 @@
 //! double point are *exact* dyadic rationals here ([`Big`]): every hit/miss
 //! decision of the reference is exact. Only square roots and quotients are
 //! rounded, to [`PRECISION`] bits.
+
+#![deny(missing_docs)]
 
 use num_bigint::{BigInt, Sign};
 use quadric::{HalfSpace, IntervalSet, Quadric, Ray, Solid, NO_SOLID};
