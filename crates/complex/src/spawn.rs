@@ -150,17 +150,24 @@ const fn gamma(n: u32) -> f64 {
 /// at most `|∇f|·u|d̂| + |A|u²|d̂|² <= 2u(|d̂|ᵀ(|A||d̂| + |w|)) (1 + u)`. The
 /// evaluation from `d̂` is three length-3 dot products (`A d̂`, `γ₃`), an add
 /// of `2w` and one of `w` (`γ₅`), a dot with `d̂` (`γ₈`) and the add of `k`
-/// (`γ₉`), each bounded by `γ₉·F` with `F = |d̂|ᵀ(|A||d̂| + 2|w|) + |k|`
-/// (Higham's running bound for sums of products). `F` itself is computed in
+/// (`γ₉`), each bounded by `γ₉·F₀` with `F₀ = |d̂|ᵀ(|A||d̂| + 2|w|) + |k|`
+/// (Higham's running bound for sums of products). `F₀` itself is computed in
 /// floating point (relative error `<= γ₉`), hence the bound
-/// `(γ₉ + 2u(1 + u))·F·(1 + γ₉)`, rounded up by taking `γ₁₂·F`.
+/// `(γ₉ + 2u(1 + u))·F₀·(1 + γ₉)`, rounded up by taking `γ₁₂`.
+///
+/// `F₀` is replaced by `F = (‖A‖_F |d̂| + 2|w|)|d̂| + |k| >= F₀`, which does
+/// not depend on the axes: the solver of the new ray forms its base point
+/// `d + λ₀r` with a rounding of `u|λ₀| <= u|d|` in *every* coordinate, so an
+/// axis-aligned surface (`A` or `n` with zeros) must not get a bound that
+/// ignores the other coordinates (that left acne on a floor `y = 0`).
 fn quadric_value(q: &Quadric, x: &Point3<f64>) -> Bounded {
     let (c, a, w, k) = q.local_parts();
     let d = x - c;
     let ad = a * d;
     let half = ad + w;
     let f = d.dot(&(half + w)) + k;
-    let mag = d.abs().dot(&(a.abs() * d.abs() + 2.0 * w.abs())) + k.abs();
+    let dn = d.norm();
+    let mag = (a.norm() * dn + 2.0 * w.norm()) * dn + k.abs();
     Bounded { f, err: gamma(12) * mag, gradient: 2.0 * half }
 }
 
@@ -168,13 +175,14 @@ fn quadric_value(q: &Quadric, x: &Point3<f64>) -> Bounded {
 /// `o` (`d = f(o)`, exact): one rounding per coordinate of `x - o`
 /// (`u|n||d̂|`), a length-3 dot product (`γ₃`) and the add of `d` (`γ₄`),
 /// bounded by `γ₆·(|n|·|d̂| + |d|)` with the same allowance for computing
-/// the magnitude in floating point.
+/// the magnitude in floating point; norms rather than `|n|ᵀ|d̂|` for the
+/// reason given at [`quadric_value`].
 fn half_space_value(h: &HalfSpace, x: &Point3<f64>) -> Bounded {
     let (o, n) = (h.reference_point(), *h.normal_vector());
     let d0 = h.value(&o);
     let d = x - o;
     let f = n.dot(&d) + d0;
-    let mag = n.abs().dot(&d.abs()) + d0.abs();
+    let mag = n.norm() * d.norm() + d0.abs();
     Bounded { f, err: gamma(8) * mag, gradient: n }
 }
 
