@@ -1,6 +1,6 @@
 //! Blocks: intersections of solids.
 
-use quadric::{Bound, HalfSpace, Interval, IntervalSet, Quadric, Ray, Solid};
+use quadric::{Bound, HalfSpace, Interval, IntervalSet, Precision, Quadric, Ray, Solid};
 
 use crate::ComplexError;
 
@@ -57,6 +57,8 @@ pub struct Block {
     /// Every solid is convex, so a ray meets the block in at most one
     /// interval: [`Block::spans`] then keeps two bounds instead of sets.
     convex: bool,
+    /// The kernel's precision mode (set by [`Complex::set_precision`](crate::Complex::set_precision)).
+    precision: Precision,
 }
 
 /// A block's intervals along a ray: without an interval set (and the copies
@@ -117,7 +119,7 @@ impl Block {
         if non_convex >= IntervalSet::CAPACITY {
             return Err(ComplexError::TooManyNonConvex { name, count: non_convex, max: IntervalSet::CAPACITY - 1 });
         }
-        Ok(Block { name, solids, opacity, material, convex: non_convex == 0 })
+        Ok(Block { name, solids, opacity, material, convex: non_convex == 0, precision: Precision::default() })
     }
 
     /// The block's name.
@@ -165,11 +167,21 @@ impl Block {
                 Solid::HalfSpace(h) => SolidRef::HalfSpace(h),
                 Solid::Quadric(q) => SolidRef::Quadric(q),
             });
-            if let Some(spans) = convex_spans(ray, solids) {
+            if let Some(spans) = convex_spans(ray, solids, self.precision) {
                 return spans;
             }
         }
         self.spans_general(ray)
+    }
+
+    /// The precision mode its sets are computed in.
+    pub fn precision(&self) -> Precision {
+        self.precision
+    }
+
+    /// Sets the precision mode of [`Block::intervals`].
+    pub fn set_precision(&mut self, precision: Precision) {
+        self.precision = precision;
     }
 
     /// Whether every solid is convex.
@@ -184,11 +196,11 @@ impl Block {
             let i = i as u32;
             acc = match s {
                 Solid::HalfSpace(h) => {
-                    let (enter, exit) = h.interval(ray, i);
+                    let (enter, exit) = h.interval_with(ray, i, self.precision);
                     acc.intersect_interval(enter, exit)
                 }
                 Solid::Quadric(q) => {
-                    let set = q.intervals(ray, i);
+                    let set = q.intervals_with(ray, i, self.precision);
                     // Within capacity: checked in `Block::new`.
                     acc.intersect(&set).unwrap_or_default()
                 }
@@ -215,12 +227,16 @@ pub(crate) enum SolidRef<'a> {
 /// [`Block::intervals`]' set path. `None` if a quadric gave more than one
 /// interval after all (then the caller takes the exact general path).
 #[inline(always)]
-pub(crate) fn convex_spans<'a>(ray: &Ray, solids: impl Iterator<Item = SolidRef<'a>>) -> Option<Spans> {
+pub(crate) fn convex_spans<'a>(
+    ray: &Ray,
+    solids: impl Iterator<Item = SolidRef<'a>>,
+    precision: Precision,
+) -> Option<Spans> {
     let (mut enter, mut exit) = (Bound::free(0.0), Bound::free(f64::INFINITY));
     for (i, s) in solids.enumerate() {
         let (e, x) = match s {
-            SolidRef::HalfSpace(h) => h.interval(ray, i as u32),
-            SolidRef::Quadric(q) => match *q.intervals(ray, i as u32).as_slice() {
+            SolidRef::HalfSpace(h) => h.interval_with(ray, i as u32, precision),
+            SolidRef::Quadric(q) => match *q.intervals_with(ray, i as u32, precision).as_slice() {
                 [] => return Some(Spans::Empty),
                 [iv] => (iv.enter, iv.exit),
                 _ => return None,

@@ -129,6 +129,22 @@ impl Complex {
         Ok(Complex { blocks, boxes, bvh, kernel, unbounded, epsilon, any_transparent })
     }
 
+    /// The precision mode of the kernel every query uses (default
+    /// [`quadric::Precision::Accurate`]; see `docs/quadric.md`, "Precision modes").
+    pub fn precision(&self) -> quadric::Precision {
+        self.kernel.precision
+    }
+
+    /// Sets the precision mode of every query (`cast_ray`, `occluded`,
+    /// `partition`, `intervals`, `block_intervals`; `contains_point`
+    /// evaluates `f` at the point, the same in every mode).
+    pub fn set_precision(&mut self, precision: quadric::Precision) {
+        self.kernel.precision = precision;
+        for b in &mut self.blocks {
+            b.set_precision(precision);
+        }
+    }
+
     /// The blocks in priority order.
     pub fn blocks(&self) -> &[Block] {
         &self.blocks

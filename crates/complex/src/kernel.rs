@@ -8,7 +8,7 @@
 //! quadrics of consecutive slots packed in two arrays in the same order, so a
 //! leaf reads a few consecutive lines of each.
 
-use quadric::{HalfSpace, Quadric, Ray, Solid};
+use quadric::{HalfSpace, Precision, Quadric, Ray, Solid};
 
 use crate::block::{convex_spans, SolidRef, Spans};
 use crate::Block;
@@ -34,6 +34,8 @@ pub(crate) struct Kernel {
     slots: Vec<Slot>,
     half_spaces: Vec<HalfSpace>,
     quadrics: Vec<Quadric>,
+    /// The precision mode of every query (`Complex::set_precision`).
+    pub(crate) precision: Precision,
 }
 
 impl Kernel {
@@ -107,7 +109,7 @@ impl Kernel {
                     SolidRef::HalfSpace(&self.half_spaces[h - 1])
                 }
             });
-            if let Some(spans) = convex_spans(ray, solids) {
+            if let Some(spans) = convex_spans(ray, solids, self.precision) {
                 return spans;
             }
         }

@@ -22,6 +22,7 @@
 #![deny(missing_docs)]
 
 mod error;
+mod exact;
 mod halfspace;
 mod interval;
 pub mod normal;
@@ -37,6 +38,7 @@ pub use error::GeometryError;
 pub use halfspace::HalfSpace;
 pub use interval::{Bound, CapacityError, Interval, IntervalSet, NO_SOLID};
 pub use nalgebra;
+pub use quadric::precision::{CertifiedIntervals, CertifiedRoot, Precision};
 pub use quadric::Quadric;
 pub use ray::Ray;
 pub use solid::Solid;

@@ -6,6 +6,11 @@ use crate::interval::{Bound, IntervalSet};
 use crate::roots::{difference_of_products, dot2, exact_sign_of_sum, stable_roots, two_sum_error};
 use crate::{GeometryError, Ray, Transform};
 
+// The precision modes (a child module: they read the private parts).
+#[path = "precision.rs"]
+pub(crate) mod precision;
+use precision::Precision;
+
 /// A quadric solid, stored around a local centre `c`:
 ///
 /// `f(x) = (x-c)ᵀ A (x-c) + 2 wᵀ(x-c) + k`, the solid being `f <= 0`.
@@ -264,7 +269,16 @@ impl Quadric {
     /// the ray re-based exactly at the foot of the perpendicular from `c`,
     /// near the roots, so that nothing cancels however far the ray starts;
     /// `t² - su` by a fused difference of products; stable roots.
+    ///
+    /// This is [`Precision::Accurate`], the default; see
+    /// [`intervals_with`](Self::intervals_with) for the other modes.
+    #[inline]
     pub fn intervals(&self, ray: &Ray, solid: u32) -> IntervalSet {
+        self.intervals_with(ray, solid, Precision::default())
+    }
+
+    /// The kernel of [`Precision::Accurate`] (see [`Quadric::intervals`]).
+    fn intervals_accurate(&self, ray: &Ray, solid: u32) -> IntervalSet {
         let (p, r) = (ray.origin().coords, ray.direction());
         let d = p - self.centre;
         // The foot of the perpendicular from the centre, `λ₀ = -r·d`. Any `λ₀`

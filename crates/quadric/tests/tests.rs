@@ -5,4 +5,5 @@ mod bad_input;
 mod fuzz_regressions;
 mod laws;
 mod oracle;
+mod stress;
 mod table;
