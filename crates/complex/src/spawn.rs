@@ -73,7 +73,12 @@ impl Complex {
     ///
     /// Errors like [`Ray::new`]: a zero or non-finite direction, or a
     /// non-finite point.
-    pub fn spawn_ray(&self, surface: Surface, point: &Point3<f64>, direction: &Vector3<f64>) -> Result<Ray, GeometryError> {
+    pub fn spawn_ray(
+        &self,
+        surface: Surface,
+        point: &Point3<f64>,
+        direction: &Vector3<f64>,
+    ) -> Result<Ray, GeometryError> {
         let solid = self.blocks().get(surface.block.index()).and_then(|b| b.solids().get(surface.solid as usize));
         match solid {
             Some(s) if point.iter().all(|c| c.is_finite()) => Ray::new(spawn_origin(s, point, direction), *direction),
