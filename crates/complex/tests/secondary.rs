@@ -9,8 +9,9 @@
 //! straight through, tangent ± 10⁻³ … 10⁻¹² of the normal, random), with
 //! `m₀` the exact medium just off the hit point on the side the ray leaves on:
 //! - *wrong side*: the medium at the spawned origin is not `m₀`;
-//! - *self-intersection* (spurious hit): `cast_ray` reports a hit at `t`
-//!   but the medium just after `t` is still `m₀`;
+//! - *self-intersection* (spurious hit): `cast_ray` reports a hit at a `t`
+//!   where the exact ray does not cross the reported surface (within a
+//!   tolerance for grazing roots);
 //! - *missed surface*: the medium changes at a sample before the reported
 //!   hit (or anywhere, if none is reported).
 //!
