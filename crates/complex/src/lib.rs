@@ -16,6 +16,7 @@ mod complex;
 mod error;
 mod kernel;
 mod partition;
+mod spawn;
 
 pub use block::{Block, BlockId, MaterialKey, Opacity};
 pub use bounds::Aabb;
@@ -23,3 +24,4 @@ pub use complex::{Complex, ComplexOptions, Hit, DEFAULT_RELATIVE_EPSILON};
 pub use error::ComplexError;
 pub use partition::{Event, Partition, Segment, Surface};
 pub use quadric::Precision;
+pub use spawn::{spawn_origin, MARGIN as SPAWN_MARGIN};

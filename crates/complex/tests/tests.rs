@@ -6,5 +6,6 @@ mod common;
 mod fuzz_regressions;
 mod kernel;
 mod oracle;
+mod secondary;
 mod seed;
 mod table;

@@ -185,7 +185,7 @@ impl<'w> Shader<'w> {
                 if nl <= 0.0 {
                     continue;
                 }
-                let pass = self.transmittance(&e.point, &l, dist, scratch);
+                let pass = self.transmittance(e, &l, dist, scratch);
                 if is_zero(&pass) {
                     continue;
                 }
@@ -226,7 +226,7 @@ impl<'w> Shader<'w> {
                 } else {
                     let dir = -eta * v + (eta * cos_i - (1.0 - sin2_t).sqrt()) * n;
                     let w = weight * mat.transmit.max();
-                    if let (true, Ok(r)) = (w >= MIN_PATH_WEIGHT, Ray::new(e.point, dir)) {
+                    if let (true, Ok(r)) = (w >= MIN_PATH_WEIGHT, self.spawn(e, &dir)) {
                         c += weigh(&mat.transmit, &self.trace_weighted(&r, depth + 1, w, scratch));
                     }
                 }
@@ -235,22 +235,30 @@ impl<'w> Shader<'w> {
         let w = weight * kr.max();
         if !is_zero(&kr) && w >= MIN_PATH_WEIGHT {
             let dir = 2.0 * cos_i * n - v;
-            if let Ok(r) = Ray::new(e.point, dir) {
+            if let Ok(r) = self.spawn(e, &dir) {
                 c += weigh(&kr, &self.trace_weighted(&r, depth + 1, w, scratch));
             }
         }
         c
     }
 
-    /// How much light passes from `x` towards a light `dist` away along `l`:
-    /// zero if an opaque block is in the way, else the product of the
-    /// `transmit` of each transparent medium crossed (once per passage).
-    fn transmittance(&self, x: &Point3<f64>, l: &Vector3<f64>, dist: f64, scratch: &mut Scratch) -> Rgb {
+    /// A secondary ray from the event's point along `dir`, its origin moved
+    /// off the surface to the side `dir` leaves on by a checked error bound
+    /// ([`Complex::spawn_ray`]): no acne however far the surface is.
+    fn spawn(&self, e: &Event, dir: &Vector3<f64>) -> Result<Ray, quadric::GeometryError> {
+        self.complex.spawn_ray(complex::Surface { block: e.block, solid: e.solid }, &e.point, dir)
+    }
+
+    /// How much light passes from the event's point towards a light `dist`
+    /// away along `l`: zero if an opaque block is in the way, else the
+    /// product of the `transmit` of each transparent medium crossed (once
+    /// per passage).
+    fn transmittance(&self, e: &Event, l: &Vector3<f64>, dist: f64, scratch: &mut Scratch) -> Rgb {
         let one = Vector3::repeat(1.0);
         if !self.world.settings.shadows {
             return one;
         }
-        let Ok(ray) = Ray::new(*x, *l) else { return one };
+        let Ok(ray) = self.spawn(e, l) else { return one };
         scratch.rays += 1;
         if !self.transparent {
             // Any blocker will do: an any-hit query, no nearest-hit ordering.
