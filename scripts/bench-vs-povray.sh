@@ -13,6 +13,7 @@
 # glass scene, sphereflake levels 3 and 4 and the 1,000-block grid. POV-Ray
 # takes minutes on larger grids (it tests every rotated box with every ray):
 # run those at a smaller size, e.g. `--width 160 --height 120 grid-10000`.
+# KOMPLEX=path/to/komplex: measure that binary (no build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -23,14 +24,19 @@ while [ $# -gt 0 ]; do
         --width) width="$2"; shift 2 ;;
         --height) height="$2"; shift 2 ;;
         --threads) threads="$2"; shift 2 ;;
-        -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,18p' "$0"; exit 0 ;;
         *) scenes+=("$1"); shift ;;
     esac
 done
 
 command -v povray >/dev/null || { echo "povray is not installed (apt-get install povray)" >&2; exit 2; }
-cargo build --release --quiet
-komplex="${CARGO_TARGET_DIR:-target}/release/komplex"
+# KOMPLEX=path/to/komplex measures that binary instead of building this checkout.
+if [ -n "${KOMPLEX:-}" ]; then
+    komplex="$KOMPLEX"
+else
+    cargo build --release --quiet
+    komplex="${CARGO_TARGET_DIR:-target}/release/komplex"
+fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
