@@ -39,12 +39,8 @@ enum Command {
         /// Also write an sRGB PNG preview.
         #[arg(long, value_name = "OUT.png")]
         png: Option<PathBuf>,
-        /// Image width (overrides the scene; alone, keeps the aspect ratio).
-        #[arg(long, value_name = "W")]
-        width: Option<u32>,
-        /// Image height (overrides the scene; alone, keeps the aspect ratio).
-        #[arg(long, value_name = "H")]
-        height: Option<u32>,
+        #[command(flatten)]
+        size: SizeArgs,
         /// Worker threads [default: one per core].
         #[arg(long, value_name = "N")]
         threads: Option<usize>,
@@ -89,24 +85,16 @@ enum Command {
         /// Flat block colours encoding the 1-based block id (an id mask), no lights.
         #[arg(long)]
         mask: bool,
-        /// Image width (overrides the scene; alone, keeps the aspect ratio).
-        #[arg(long, value_name = "W")]
-        width: Option<u32>,
-        /// Image height (overrides the scene; alone, keeps the aspect ratio).
-        #[arg(long, value_name = "H")]
-        height: Option<u32>,
+        #[command(flatten)]
+        size: SizeArgs,
     },
     /// Render scenes once each and print rays per second (primary and all rays).
     Bench {
         /// The scene files (JSON).
         #[arg(required = true)]
         scenes: Vec<PathBuf>,
-        /// Image width [default: the scene's].
-        #[arg(long, value_name = "W")]
-        width: Option<u32>,
-        /// Image height [default: the scene's].
-        #[arg(long, value_name = "H")]
-        height: Option<u32>,
+        #[command(flatten)]
+        size: SizeArgs,
         /// Worker threads [default: one per core].
         #[arg(long, value_name = "N")]
         threads: Option<usize>,
@@ -119,6 +107,28 @@ enum Command {
         #[arg(short, long, value_name = "OUT.json", global = true)]
         output: Option<PathBuf>,
     },
+}
+
+/// `--width`/`--height`, shared by the commands that make an image.
+#[derive(clap::Args)]
+struct SizeArgs {
+    /// Image width (overrides the scene; alone, keeps the aspect ratio).
+    #[arg(long, value_name = "W")]
+    width: Option<u32>,
+    /// Image height (overrides the scene; alone, keeps the aspect ratio).
+    #[arg(long, value_name = "H")]
+    height: Option<u32>,
+}
+
+impl SizeArgs {
+    /// Applies the overrides to the world's camera.
+    fn apply(&self, world: &mut render::scene::World) -> Result<(), Error> {
+        world.camera = world
+            .camera
+            .resized(self.width, self.height)
+            .map_err(|e| Error::Options(format!("--width/--height: {e}")))?;
+        Ok(())
+    }
 }
 
 #[derive(Subcommand)]
@@ -159,23 +169,9 @@ fn triple(v: &[f64]) -> [f64; 3] {
     [v[0], v[1], v[2]]
 }
 
-/// Applies `--width`/`--height` to the world's camera; one alone keeps the aspect ratio.
-fn resize(world: &mut render::scene::World, width: Option<u32>, height: Option<u32>) -> Result<(), Error> {
-    let cam = world.camera;
-    let (w0, h0) = (f64::from(cam.width()), f64::from(cam.height()));
-    let size = match (width, height) {
-        (None, None) => return Ok(()),
-        (Some(w), Some(h)) => (w, h),
-        (Some(w), None) => (w, ((f64::from(w) * h0 / w0).round() as u32).max(1)),
-        (None, Some(h)) => (((f64::from(h) * w0 / h0).round() as u32).max(1), h),
-    };
-    world.camera = cam.with_size(size.0, size.1).map_err(|e| Error::Options(format!("--width/--height: {e}")))?;
-    Ok(())
-}
-
 fn run(command: Command) -> Result<(), Error> {
     match command {
-        Command::Render { scene, output, png, width, height, threads, samples, half, exposure } => {
+        Command::Render { scene, output, png, size, threads, samples, half, exposure } => {
             let cancel = interrupt_flag();
             if !exposure.is_finite() {
                 return Err(Error::Options(format!("--exposure must be a finite number of stops, got {exposure}")));
@@ -187,17 +183,7 @@ fn run(command: Command) -> Result<(), Error> {
                 }
                 world.settings.samples = n;
             }
-            let cam = world.camera;
-            let (w0, h0) = (f64::from(cam.width()), f64::from(cam.height()));
-            let size = match (width, height) {
-                (None, None) => None,
-                (Some(w), Some(h)) => Some((w, h)),
-                (Some(w), None) => Some((w, ((f64::from(w) * h0 / w0).round() as u32).max(1))),
-                (None, Some(h)) => Some((((f64::from(h) * w0 / h0).round() as u32).max(1), h)),
-            };
-            if let Some((w, h)) = size {
-                world.camera = cam.with_size(w, h).map_err(|e| Error::Options(format!("--width/--height: {e}")))?;
-            }
+            size.apply(&mut world)?;
             let output = output.unwrap_or_else(|| default_output(&scene));
             // Fail before the render, not after it, if an output cannot be written.
             render::check_writable(&output)?;
@@ -263,18 +249,13 @@ fn run(command: Command) -> Result<(), Error> {
             print!("{}", render::schema_json());
             Ok(())
         }
-        Command::Bench { scenes, width, height, threads } => {
-            let size = match (width, height) {
-                (Some(w), Some(h)) => Some((w, h)),
-                (None, None) => None,
-                _ => return Err(Error::Options("bench takes both --width and --height, or neither".into())),
-            };
+        Command::Bench { scenes, size, threads } => {
             println!(
                 "{:<28} {:>8} {:>9} {:>9} {:>9} {:>12} {:>12} {:>14} {:>14}",
                 "scene", "blocks", "load s", "size", "render s", "primary", "all rays", "primary/s", "all rays/s"
             );
             for scene in scenes {
-                let m = render::bench::measure(&scene, size, threads)?;
+                let m = render::bench::measure(&scene, (size.width, size.height), threads)?;
                 println!(
                     "{:<28} {:>8} {:>9.3} {:>9} {:>9.3} {:>12} {:>12} {:>14.0} {:>14.0}",
                     scene.file_stem().map_or_else(|| scene.display().to_string(), |s| s.to_string_lossy().into()),
@@ -304,9 +285,9 @@ fn run(command: Command) -> Result<(), Error> {
                 }
             }
         }
-        Command::ExportPov { scene, output, mask, width, height } => {
+        Command::ExportPov { scene, output, mask, size } => {
             let mut world = render::load(&scene)?;
-            resize(&mut world, width, height)?;
+            size.apply(&mut world)?;
             let text = render::pov::export(&world, render::pov::PovOptions { mask });
             match output {
                 Some(path) => std::fs::write(&path, text).map_err(|source| Error::Io { path, source }),

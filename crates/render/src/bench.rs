@@ -12,7 +12,7 @@
 //! std::fs::write(&path, r#"{ "camera": { "eye": [0, 0, 5], "direction": [0, 0, -1] },
 //!                            "lights": [ { "position": [2, 2, 5] } ],
 //!                            "blocks": [ { "objects": [ { "sphere": {} } ] } ] }"#).unwrap();
-//! let m = render::bench::measure(&path, Some((8, 6)), Some(1)).unwrap();
+//! let m = render::bench::measure(&path, (Some(8), Some(6)), Some(1)).unwrap();
 //! assert_eq!((m.blocks, m.primary), (1, 48));
 //! assert!(m.rays > m.primary); // shadow rays from the pixels that see the ball
 //! ```
@@ -53,15 +53,16 @@ impl Measurement {
     }
 }
 
-/// Loads `path`, renders it once at `size` (default: the scene's) with
-/// `threads` workers and one ray per pixel, and reports the times.
-pub fn measure(path: &Path, size: Option<(u32, u32)>, threads: Option<usize>) -> Result<Measurement, Error> {
+/// Loads `path`, renders it once at `size` (`(width, height)` overrides as
+/// in [`Camera::resized`](crate::camera::Camera::resized); default: the
+/// scene's) with `threads` workers and one ray per pixel, and reports the
+/// times.
+pub fn measure(path: &Path, size: (Option<u32>, Option<u32>), threads: Option<usize>) -> Result<Measurement, Error> {
     let start = Instant::now();
     let mut world = crate::load(path)?;
     let load = start.elapsed();
-    if let Some((w, h)) = size {
-        world.camera = world.camera.with_size(w, h).map_err(|e| Error::Options(format!("--width/--height: {e}")))?;
-    }
+    world.camera =
+        world.camera.resized(size.0, size.1).map_err(|e| Error::Options(format!("--width/--height: {e}")))?;
     world.settings.samples = 1;
     let (frame, stats) = crate::frame::render(&world, crate::frame::Options { threads }, &|| {})?;
     Ok(Measurement {

@@ -102,6 +102,20 @@ impl Camera {
         Camera::new(self.eye, self.d, self.u, width, height, self.aperture)
     }
 
+    /// The camera with the size overrides of the command line: both given,
+    /// that size; one given, the other side keeps this camera's aspect ratio
+    /// (rounded, at least 1); none, the camera itself.
+    pub fn resized(&self, width: Option<u32>, height: Option<u32>) -> Result<Self, CameraError> {
+        let (w0, h0) = (f64::from(self.width), f64::from(self.height));
+        let keep = |side: u32, num: f64, den: f64| ((f64::from(side) * num / den).round() as u32).max(1);
+        match (width, height) {
+            (None, None) => Ok(*self),
+            (Some(w), Some(h)) => self.with_size(w, h),
+            (Some(w), None) => self.with_size(w, keep(w, h0, w0)),
+            (None, Some(h)) => self.with_size(keep(h, w0, h0), h),
+        }
+    }
+
     /// Image width in pixels.
     pub fn width(&self) -> u32 {
         self.width
