@@ -7,4 +7,5 @@ mod fuzz_regressions;
 mod kernel;
 mod oracle;
 mod seed;
+mod stress;
 mod table;
