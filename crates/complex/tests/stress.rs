@@ -50,14 +50,15 @@ fn check(blocks: &[(Vec<Solid>, Opacity)], rays: &[Ray], epsilon: Option<f64>, c
             let p = complex.partition(ray);
             let computed: Vec<(f64, f64, Option<usize>)> =
                 p.segments.iter().map(|s| (s.start, s.end, s.owner.map(|b| b.index()))).collect();
-            let scale = ray.origin().coords.amax().max(
-                exact.segments.iter().map(|s| s.end.to_f64()).filter(|t| t.is_finite()).fold(1.0, f64::max),
-            );
+            let scale = ray
+                .origin()
+                .coords
+                .amax()
+                .max(exact.segments.iter().map(|s| s.end.to_f64()).filter(|t| t.is_finite()).fold(1.0, f64::max));
             let tolerance = TOLERANCE_ULPS * f64::EPSILON * scale;
             let n = exact.ownership_errors(&computed, tolerance);
             if n > 0 {
-                let want: Vec<_> =
-                    exact.segments.iter().map(|s| (s.start.to_f64(), s.end.to_f64(), s.owner)).collect();
+                let want: Vec<_> = exact.segments.iter().map(|s| (s.start.to_f64(), s.end.to_f64(), s.owner)).collect();
                 errors.push(format!("{ray:?}: {n} errors\n  got  {computed:?}\n  want {want:?}"));
             }
             // Cracks: every computed unowned segment of positive length is
@@ -89,7 +90,9 @@ fn rays(rng: &mut Rng, from: Vector3<f64>, spread: f64, at: Vector3<f64>, aim_sp
 
 fn turn() -> Transform {
     let r = |t: Result<Transform, quadric::GeometryError>| t.expect("valid rotation");
-    r(Transform::rotate_x_degrees(23.0)).then(&r(Transform::rotate_y_degrees(41.0))).then(&r(Transform::rotate_z_degrees(7.0)))
+    r(Transform::rotate_x_degrees(23.0))
+        .then(&r(Transform::rotate_y_degrees(41.0)))
+        .then(&r(Transform::rotate_z_degrees(7.0)))
 }
 
 /// A box split by a curved surface into `Q ∩ box` and `-Q ∩ box`.

@@ -41,7 +41,12 @@ fn judge_ray(solid: &Solid, ray: &Ray, verdicts: &mut Verdicts) -> Result<(), St
     verdicts.rays += 1;
     verdicts.crossings += want.len();
     if got.len() != want.len() {
-        return Err(format!("certified: {} crossings, exact {}: {solid:?} {ray:?} {:?}", got.len(), want.len(), certified.set));
+        return Err(format!(
+            "certified: {} crossings, exact {}: {solid:?} {ray:?} {:?}",
+            got.len(),
+            want.len(),
+            certified.set
+        ));
     }
     for (l, &t) in want.iter().zip(&got) {
         let error = certified.error_at(t);
@@ -71,7 +76,11 @@ fn check_rays(solid: &Solid, rays: &[Ray], context: &str) -> Verdicts {
             panic!("{context}: {e}");
         }
     }
-    assert!(v.unexcused_default.is_empty(), "{context}: default mode wrong where the bound is clear: {:?}", v.unexcused_default);
+    assert!(
+        v.unexcused_default.is_empty(),
+        "{context}: default mode wrong where the bound is clear: {:?}",
+        v.unexcused_default
+    );
     v
 }
 
@@ -184,7 +193,9 @@ fn exact_tangencies_and_starts_on_the_surface() {
         let tube = Solid::from(Quadric::tube_y().transformed(&move_to));
         let cone = Solid::from(Quadric::cone().transformed(&move_to));
         let plane = Solid::from(HalfSpace::new(0.0, 1.0, 0.0, 0.0).expect("valid").transformed(&move_to));
-        let at = |x: f64, y: f64, z: f64, dir: Vector3<f64>| Ray::new(Point3::from(c + Vector3::new(x, y, z)), dir).expect("valid");
+        let at = |x: f64, y: f64, z: f64, dir: Vector3<f64>| {
+            Ray::new(Point3::from(c + Vector3::new(x, y, z)), dir).expect("valid")
+        };
         let cases: Vec<(&Solid, Ray, usize)> = vec![
             // Tangent to the sphere and the tube from outside: no crossing.
             (&sphere, at(-5.0, 1.0, 0.0, Vector3::x()), 0),
@@ -281,4 +292,29 @@ proptest! {
         let mut v = Verdicts::default();
         judge_ray(&solid, &ray, &mut v).map_err(TestCaseError::fail)?;
     }
+}
+
+/// Ties between the roots of two solids are decided exactly: the unit
+/// sphere and the plane `x <= 1` meet the x axis at the same point; a plane
+/// `2⁻⁴⁰` further out does not.
+#[test]
+fn ties_between_solids_are_exact() {
+    use core::cmp::Ordering;
+    let ray = Ray::new(Point3::new(-3.0, 0.0, 0.0), Vector3::x()).expect("valid");
+    let sphere = Solid::from(Quadric::sphere());
+    let plane = |d: f64| Solid::from(HalfSpace::new(1.0, 0.0, 0.0, -d).expect("valid"));
+    assert_eq!(sphere.compare_roots(1, &plane(1.0), 0, &ray), Some(Ordering::Equal));
+    assert_eq!(sphere.compare_roots(0, &plane(1.0), 0, &ray), Some(Ordering::Less));
+    assert_eq!(sphere.compare_roots(1, &plane(1.0 + 2f64.powi(-40)), 0, &ray), Some(Ordering::Less));
+    assert_eq!(sphere.compare_roots(2, &plane(1.0), 0, &ray), None);
+    // The ball of radius 5 and the plane 3x + 4y <= 25 through its point
+    // (3, 4, 0): the ray up x = 3 leaves both there (at λ = 14).
+    let five =
+        Solid::from(Quadric::from_coefficients([1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -25.0]).expect("finite"));
+    let up = Ray::new(Point3::new(3.0, -10.0, 0.0), Vector3::y()).expect("valid");
+    let tangent = Solid::from(HalfSpace::new(3.0, 4.0, 0.0, -25.0).expect("valid"));
+    assert_eq!(five.compare_roots(1, &tangent, 0, &up), Some(Ordering::Equal));
+    assert_eq!(five.compare_roots(0, &tangent, 0, &up), Some(Ordering::Less));
+    let certified = five.intervals_certified(&up, 0);
+    assert_eq!(certified.roots().iter().map(|r| r.t).collect::<Vec<_>>(), [6.0, 14.0]);
 }
