@@ -8,4 +8,5 @@ mod kernel;
 mod oracle;
 mod secondary;
 mod seed;
+mod stress;
 mod table;

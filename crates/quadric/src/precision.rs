@@ -65,6 +65,41 @@ impl CertifiedIntervals {
         CertifiedIntervals { set, roots: r, count, settled_exactly }
     }
 
+    /// The same answer with the values of `other` (a set of the same
+    /// shape, else `self` unchanged), each bound widened by the distance
+    /// between the two values (`|x - λ| <= |x - t| + |t - λ|`).
+    fn with_values_of(&self, other: &IntervalSet) -> Self {
+        let ends = |set: &IntervalSet| {
+            let mut out = [Bound::free(0.0); 2 * IntervalSet::CAPACITY];
+            for (k, iv) in set.iter().enumerate() {
+                (out[2 * k], out[2 * k + 1]) = (iv.enter, iv.exit);
+            }
+            (out, 2 * set.len())
+        };
+        let ((mine, n), (theirs, m)) = (ends(&self.set), ends(other));
+        if n != m || mine[..n].iter().zip(&theirs[..m]).any(|(a, b)| a.solid != b.solid) {
+            return *self;
+        }
+        let mut out = *self;
+        for (a, b) in mine[..n].iter().zip(&theirs[..m]) {
+            if a.solid().is_none() {
+                continue;
+            }
+            for root in out.roots[..out.count].iter_mut() {
+                if root.t + 0.0 == a.t {
+                    *root = CertifiedRoot { t: b.t, error: up(root.error + (b.t - a.t).abs()) };
+                }
+            }
+        }
+        // The order of the roots is certified; the new values keep it
+        // unless two roots moved within their bounds (then keep the old).
+        if out.roots().windows(2).any(|w| w[0].t > w[1].t) {
+            return *self;
+        }
+        out.set = *other;
+        out
+    }
+
     /// The crossings of the whole line (before clipping to `λ >= 0`), in
     /// increasing order, with their bounds.
     pub fn roots(&self) -> &[CertifiedRoot] {
@@ -124,8 +159,17 @@ impl Quadric {
     /// The true solid is the one the stored doubles define
     /// ([`local_parts`](Self::local_parts)); every hit/miss decision is
     /// exact for it.
+    ///
+    /// The values are those of [`Precision::Accurate`] wherever its set has
+    /// the certified shape (it is the more accurate of the two
+    /// floating-point kernels), each with the certified bound widened by
+    /// its distance from the certified root: still rigorous.
     pub fn intervals_certified(&self, ray: &Ray, solid: u32) -> CertifiedIntervals {
-        Parts { c: self.centre, a: self.a, w: self.w, k: self.k }.certified(ray, solid)
+        let certified = Parts { c: self.centre, a: self.a, w: self.w, k: self.k }.certified(ray, solid);
+        if certified.settled_exactly {
+            return certified;
+        }
+        certified.with_values_of(&self.intervals_accurate(ray, solid))
     }
 }
 
@@ -177,8 +221,12 @@ impl HalfSpace {
     pub fn intervals_certified(&self, ray: &Ray, solid: u32) -> CertifiedIntervals {
         let o = self.reference_point();
         // `value(o) = n·0 + d = d` exactly; halving `n` is exact.
-        Parts { c: o.coords, a: Matrix3::zeros(), w: self.normal_vector() * 0.5, k: self.value(&o) }
-            .certified(ray, solid)
+        let parts = Parts { c: o.coords, a: Matrix3::zeros(), w: self.normal_vector() * 0.5, k: self.value(&o) };
+        let certified = parts.certified(ray, solid);
+        if certified.settled_exactly {
+            return certified;
+        }
+        certified.with_values_of(&self.intervals(ray, solid))
     }
 }
 

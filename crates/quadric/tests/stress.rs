@@ -293,3 +293,28 @@ proptest! {
         judge_ray(&solid, &ray, &mut v).map_err(TestCaseError::fail)?;
     }
 }
+
+/// Ties between the roots of two solids are decided exactly: the unit
+/// sphere and the plane `x <= 1` meet the x axis at the same point; a plane
+/// `2⁻⁴⁰` further out does not.
+#[test]
+fn ties_between_solids_are_exact() {
+    use core::cmp::Ordering;
+    let ray = Ray::new(Point3::new(-3.0, 0.0, 0.0), Vector3::x()).expect("valid");
+    let sphere = Solid::from(Quadric::sphere());
+    let plane = |d: f64| Solid::from(HalfSpace::new(1.0, 0.0, 0.0, -d).expect("valid"));
+    assert_eq!(sphere.compare_roots(1, &plane(1.0), 0, &ray), Some(Ordering::Equal));
+    assert_eq!(sphere.compare_roots(0, &plane(1.0), 0, &ray), Some(Ordering::Less));
+    assert_eq!(sphere.compare_roots(1, &plane(1.0 + 2f64.powi(-40)), 0, &ray), Some(Ordering::Less));
+    assert_eq!(sphere.compare_roots(2, &plane(1.0), 0, &ray), None);
+    // The ball of radius 5 and the plane 3x + 4y <= 25 through its point
+    // (3, 4, 0): the ray up x = 3 leaves both there (at λ = 14).
+    let five =
+        Solid::from(Quadric::from_coefficients([1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -25.0]).expect("finite"));
+    let up = Ray::new(Point3::new(3.0, -10.0, 0.0), Vector3::y()).expect("valid");
+    let tangent = Solid::from(HalfSpace::new(3.0, 4.0, 0.0, -25.0).expect("valid"));
+    assert_eq!(five.compare_roots(1, &tangent, 0, &up), Some(Ordering::Equal));
+    assert_eq!(five.compare_roots(0, &tangent, 0, &up), Some(Ordering::Less));
+    let certified = five.intervals_certified(&up, 0);
+    assert_eq!(certified.roots().iter().map(|r| r.t).collect::<Vec<_>>(), [6.0, 14.0]);
+}

@@ -1,0 +1,183 @@
+//! Numerical stress suite at the complex level, judged by the `reference`
+//! crate's exact partition (exact roots, exact ties, SPEC §3 priority and
+//! the ε rule): a surface shared by two blocks as `+Q` and `-Q` (no cracks,
+//! no double hits in the union), slabs of two half-spaces 10⁻⁹ apart,
+//! nested transparent blocks, rays starting inside blocks, a block of size
+//! 10⁻⁶ next to one of size 10⁶, all translated 1 … 10⁹ from the origin.
+//!
+//! Asserted for the default mode and for `Precision::Certified`: no
+//! ownership error of the partition beyond `TOLERANCE` of a cut (relative
+//! to the scene's coordinates), and the union's segments have no crack.
+//! Bounded in size: a few hundred rays per scene.
+
+use complex::{Block, Complex, ComplexOptions, MaterialKey, Opacity, Precision};
+use quadric::nalgebra::{Point3, Vector3};
+use quadric::{Quadric, Ray, Solid, Transform};
+use reference::{ExactBlock, ExactPartition, Rng};
+
+use crate::common::{cuboid, hs, moved, O, T};
+
+/// Disagreements within this many ulps (of the larger of the ray's origin
+/// and the cut) of an exact cut are not ownership errors: where two
+/// surfaces cross within rounding of each other, either order is right.
+const TOLERANCE_ULPS: f64 = 64.0;
+
+const RAYS: usize = 150;
+
+fn complex_of(blocks: &[(Vec<Solid>, Opacity)], precision: Precision, epsilon: Option<f64>) -> Complex {
+    let blocks = blocks
+        .iter()
+        .enumerate()
+        .map(|(i, (s, o))| Block::new(format!("b{i}"), s.clone(), *o, MaterialKey(i as u32)).expect("valid block"))
+        .collect();
+    let mut c = Complex::new(blocks, ComplexOptions { epsilon }).expect("valid complex");
+    c.set_precision(precision);
+    assert_eq!(c.precision(), precision);
+    c
+}
+
+/// Ownership errors of `ray` in both modes; also that the union has no
+/// crack: a `None` segment strictly between two owned ones that the exact
+/// partition does not have.
+fn check(blocks: &[(Vec<Solid>, Opacity)], rays: &[Ray], epsilon: Option<f64>, context: &str) {
+    let exact_blocks: Vec<ExactBlock> =
+        blocks.iter().map(|(s, o)| ExactBlock { solids: s.clone(), transparent: *o == T }).collect();
+    for precision in [Precision::Accurate, Precision::Certified] {
+        let complex = complex_of(blocks, precision, epsilon);
+        let mut errors = Vec::new();
+        for ray in rays {
+            let exact = ExactPartition::new(&exact_blocks, ray, complex.epsilon());
+            let p = complex.partition(ray);
+            let computed: Vec<(f64, f64, Option<usize>)> =
+                p.segments.iter().map(|s| (s.start, s.end, s.owner.map(|b| b.index()))).collect();
+            let scale = ray
+                .origin()
+                .coords
+                .amax()
+                .max(exact.segments.iter().map(|s| s.end.to_f64()).filter(|t| t.is_finite()).fold(1.0, f64::max));
+            let tolerance = TOLERANCE_ULPS * f64::EPSILON * scale;
+            let n = exact.ownership_errors(&computed, tolerance);
+            if n > 0 {
+                let want: Vec<_> = exact.segments.iter().map(|s| (s.start.to_f64(), s.end.to_f64(), s.owner)).collect();
+                errors.push(format!("{ray:?}: {n} errors\n  got  {computed:?}\n  want {want:?}"));
+            }
+            // Cracks: every computed unowned segment of positive length is
+            // unowned in the exact partition at its midpoint.
+            for &(a, b, owner) in &computed {
+                if owner.is_none() && b > a && b.is_finite() {
+                    let mid = 0.5 * (a + b);
+                    if mid > a && mid < b && exact.owner_at(mid).is_some() && b - a > tolerance {
+                        errors.push(format!("{ray:?}: crack [{a}, {b}]"));
+                    }
+                }
+            }
+        }
+        assert!(errors.is_empty(), "{context}, {precision:?}: {} rays wrong, e.g. {}", errors.len(), errors[0]);
+    }
+}
+
+/// Rays from random points within `spread` of `from`, aimed at random points
+/// within `aim_spread` of `at`.
+fn rays(rng: &mut Rng, from: Vector3<f64>, spread: f64, at: Vector3<f64>, aim_spread: f64) -> Vec<Ray> {
+    let mut out = Vec::new();
+    while out.len() < RAYS {
+        let o = from + Vector3::from(rng.in_ball(spread));
+        let x = at + Vector3::from(rng.in_ball(aim_spread));
+        out.extend(Ray::new(Point3::from(o), x - o).ok());
+    }
+    out
+}
+
+fn turn() -> Transform {
+    let r = |t: Result<Transform, quadric::GeometryError>| t.expect("valid rotation");
+    r(Transform::rotate_x_degrees(23.0))
+        .then(&r(Transform::rotate_y_degrees(41.0)))
+        .then(&r(Transform::rotate_z_degrees(7.0)))
+}
+
+/// A box split by a curved surface into `Q ∩ box` and `-Q ∩ box`.
+#[test]
+fn shared_surface_has_no_cracks_or_double_hits() {
+    let mut rng = Rng::new(0xc4ac);
+    for q in [Quadric::sphere(), Quadric::tube_y(), Quadric::hyperboloid_one_sheet(), Quadric::paraboloid()] {
+        for distance in [1.0, 1e3, 1e6, 1e9] {
+            let c = Vector3::from(rng.direction()) * distance;
+            let place = turn().then(&Transform::translate(c).expect("valid"));
+            let q = Solid::from(q).transformed(&place);
+            let cube = moved(&cuboid([-1.5; 3], [1.5; 3]), &place);
+            let inside: Vec<Solid> = std::iter::once(q).chain(cube.iter().copied()).collect();
+            let outside: Vec<Solid> = std::iter::once(q.complement()).chain(cube.iter().copied()).collect();
+            let blocks = [(inside, O), (outside, T)];
+            let camera = if distance > 1.0 { Vector3::zeros() } else { c + Vector3::new(5.0, 1.0, -3.0) };
+            let rays = rays(&mut rng, camera, 0.25, c, 1.5);
+            check(&blocks, &rays, None, &format!("{q:?} shared at {distance:e}"));
+            // No double hit: each crossing of the shared surface is one event.
+            let complex = complex_of(&blocks, Precision::default(), None);
+            for ray in &rays {
+                let p = complex.partition(ray);
+                for w in p.events.windows(2) {
+                    assert!(w[0].t < w[1].t, "two events at {} on {ray:?}", w[0].t);
+                }
+            }
+        }
+    }
+}
+
+/// Slabs `h <= n·x <= h + 10⁻⁹` (two half-spaces), rotated and translated.
+#[test]
+fn thin_slabs() {
+    let mut rng = Rng::new(0x51ab);
+    for distance in [1.0, 1e3, 1e6, 1e9] {
+        let c = Vector3::from(rng.direction()) * distance;
+        let place = turn().then(&Transform::translate(c).expect("valid"));
+        let slab = moved(&[hs(0.0, 1.0, 0.0, -1e-9), hs(0.0, -1.0, 0.0, 0.0)], &place);
+        let ball = vec![Solid::from(Quadric::sphere().transformed(&place))];
+        let blocks = [(slab, O), (ball, T)];
+        let camera = c + turn().apply_vector(&Vector3::new(0.3, 4.0, 0.2));
+        let rays = rays(&mut rng, camera, 0.5, c, 0.9);
+        check(&blocks, &rays, None, &format!("slab at {distance:e}"));
+    }
+}
+
+/// Nested transparent spheres with an opaque core, rays from inside and outside.
+#[test]
+fn nested_transparent_blocks_and_rays_from_inside() {
+    let mut rng = Rng::new(0x7e57);
+    for distance in [1.0, 1e3, 1e6, 1e9] {
+        let c = Vector3::from(rng.direction()) * distance;
+        let ball = |r: f64| {
+            let m = Transform::scale(r).expect("valid").then(&Transform::translate(c).expect("valid"));
+            vec![Solid::from(Quadric::sphere().transformed(&m))]
+        };
+        // Priority: the small transparent ball first, then the larger ones;
+        // the opaque core last (it wins anyway).
+        let blocks = [(ball(1.0), T), (ball(2.0), T), (ball(3.0), T), (ball(0.5), O)];
+        let from_inside = rays(&mut rng, c, 2.5, c, 3.0);
+        check(&blocks, &from_inside, None, &format!("nested at {distance:e}, from inside"));
+        let camera = if distance > 1.0 { Vector3::zeros() } else { c + Vector3::new(6.0, 0.0, 0.0) };
+        let from_outside = rays(&mut rng, camera, 0.25, c, 3.0);
+        check(&blocks, &from_outside, None, &format!("nested at {distance:e}, from outside"));
+    }
+}
+
+/// A ball of radius 10⁻⁶ next to a ball of radius 10⁶ (their centres
+/// `10⁶` apart), at `1 … 10⁶` from the origin: beyond, the tiny ball is only
+/// a few ulps of its coordinates wide.
+#[test]
+fn tiny_next_to_huge() {
+    let mut rng = Rng::new(0x5123);
+    for distance in [1.0, 1e3, 1e6] {
+        let c = Vector3::from(rng.direction()) * distance;
+        let huge = Transform::scale(1e6).expect("valid").then(&Transform::translate(c).expect("valid"));
+        let tiny_at = c + Vector3::new(1e6 + 2e-6, 0.0, 0.0);
+        let tiny = Transform::scale(1e-6).expect("valid").then(&Transform::translate(tiny_at).expect("valid"));
+        let blocks = [
+            (vec![Solid::from(Quadric::sphere().transformed(&tiny))], O),
+            (vec![Solid::from(Quadric::sphere().transformed(&huge))], O),
+        ];
+        let camera = tiny_at + Vector3::new(3e-6, 5e-6, 0.0);
+        let rays = rays(&mut rng, camera, 1e-6, tiny_at, 1.5e-6);
+        // ε = 0: the default (10⁻⁹ of the scene) would swallow the tiny ball.
+        check(&blocks, &rays, Some(0.0), &format!("tiny next to huge at {distance:e}"));
+    }
+}
