@@ -103,6 +103,30 @@ impl RayBoxes {
         (t0 < f64::INFINITY && t0 <= t1 + slack).then_some(t0 - slack)
     }
 
+    /// The parameter range `[lo, hi]` of the line in the padded box, without
+    /// slack or clipping: the same slabs as [`RayBoxes::enter`], whose range
+    /// for `[t_min, t_max]` is exactly `[max(t_min, lo), min(t_max, hi)]`. So
+    /// a probe `enter(.., t, t)` finds the box for every `t` in `[lo, hi]`,
+    /// and so does every node above it (its box holds this one, and the slab
+    /// arithmetic is monotone). `lo > hi` when the line misses the box.
+    #[inline(always)]
+    pub(crate) fn range(&self, min: &[f64; 3], max: &[f64; 3]) -> (f64, f64) {
+        let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+        for i in 0..3 {
+            let inv = self.inv[i];
+            let a = (min[i] - self.pad - self.origin[i]) * inv;
+            let b = (max[i] + self.pad - self.origin[i]) * inv;
+            let (a, b) = if inv >= 0.0 { (a, b) } else { (b, a) };
+            if a > t0 {
+                t0 = a;
+            }
+            if b < t1 {
+                t1 = b;
+            }
+        }
+        (t0, t1)
+    }
+
     /// [`RayBoxes::enter`] for a node's box.
     #[inline(always)]
     fn enter_node(&self, node: &Node, t_min: f64, t_max: f64) -> Option<f64> {

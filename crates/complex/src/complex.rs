@@ -3,7 +3,7 @@
 use core::cell::RefCell;
 
 use quadric::nalgebra::{Point3, Vector3};
-use quadric::{IntervalSet, Ray};
+use quadric::{Bound, Interval, IntervalSet, Ray};
 
 use crate::block::{SolidRef, Spans};
 use crate::bounds::block_box;
@@ -180,9 +180,82 @@ impl Complex {
         self.boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b))
     }
 
-    /// The interval set of one block along the ray, without the ε rule.
+    /// The interval set of one block along the ray as every query sees it,
+    /// without the ε rule: [`Block::intervals`] clipped to the part of the
+    /// ray inside the block's box ([`Complex::block_aabb`], grown by a few
+    /// hundred ulps of the ray origin). The box is conservative in exact
+    /// arithmetic, so the clip removes only what the kernel put outside the
+    /// block by rounding (a sliver of a degenerate quadric, a crossing of a
+    /// half-space whose reference point is far away); an end moved by the
+    /// clip lies on the box and is tagged with a solid the ray is outside
+    /// of there (see `docs/complex.md`, "One set per block and ray").
     pub fn block_intervals(&self, id: BlockId, ray: &Ray) -> IntervalSet {
-        self.blocks[id.index()].intervals(ray)
+        if self.boxes[id.index()].is_empty() {
+            return IntervalSet::empty();
+        }
+        self.block_spans(id.0, ray, &RayBoxes::new(ray)).set()
+    }
+
+    /// The spans of the block in BVH slot `k`, clipped to its box: the one
+    /// place every query of a bounded block reads its intervals from.
+    #[inline(always)]
+    fn slot_spans(&self, k: u32, ray: &Ray, rb: &RayBoxes) -> Spans {
+        let i = self.kernel.block(k);
+        self.clip_to_box(i, self.kernel.spans(k, ray, &self.blocks), ray, rb)
+    }
+
+    /// The spans of block `i`, clipped to its box (for unbounded blocks).
+    #[inline]
+    fn block_spans(&self, i: u32, ray: &Ray, rb: &RayBoxes) -> Spans {
+        self.clip_to_box(i, self.blocks[i as usize].spans(ray), ray, rb)
+    }
+
+    /// `spans` within the range `[lo, hi]` where the ray is in block `i`'s
+    /// padded box, the same range the box probes of the queries test: so
+    /// every `t` of a set is found by a probe at `t`, and the partition and
+    /// `cast_ray` see the same sets. The common case (nothing outside) is two
+    /// comparisons after the slab test.
+    #[inline(always)]
+    fn clip_to_box(&self, i: u32, spans: Spans, ray: &Ray, rb: &RayBoxes) -> Spans {
+        let s = spans.as_slice();
+        let (Some(first), Some(last)) = (s.first(), s.last()) else { return spans };
+        let b = &self.boxes[i as usize];
+        let (lo, hi) = rb.range(&b.min.coords.into(), &b.max.coords.into());
+        if first.enter.t >= lo && last.exit.t <= hi {
+            return spans;
+        }
+        self.clip_spans(i, &spans, lo, hi, ray)
+    }
+
+    /// The cold part of [`Complex::clip_to_box`]: an end moved to `lo` or
+    /// `hi` keeps the solid the kernel tagged it with; a free end (the ray
+    /// origin, or infinity) takes the first solid the ray is outside of
+    /// there (the box face is near that solid's surface), else solid 0.
+    #[cold]
+    #[inline(never)]
+    fn clip_spans(&self, i: u32, spans: &Spans, lo: f64, hi: f64, ray: &Ray) -> Spans {
+        let solids = self.blocks[i as usize].solids();
+        let tag = |b: Bound, t: f64| {
+            let x = ray.at(t);
+            let solid = b.solid().or_else(|| solids.iter().position(|s| s.value(&x) > 0.0).map(|k| k as u32));
+            Bound::new(t, solid.unwrap_or(0))
+        };
+        let mut out = [Interval::new(Bound::free(0.0), Bound::free(0.0)); IntervalSet::CAPACITY];
+        let mut n = 0;
+        for iv in spans.as_slice() {
+            let enter = if iv.enter.t < lo { tag(iv.enter, lo) } else { iv.enter };
+            let exit = if iv.exit.t > hi { tag(iv.exit, hi) } else { iv.exit };
+            if enter.t < exit.t {
+                out[n] = Interval::new(enter, exit);
+                n += 1;
+            }
+        }
+        match &out[..n] {
+            [] => Spans::Empty,
+            [iv] => Spans::One(*iv),
+            // At most as many intervals as the block had: within capacity.
+            many => Spans::Many(IntervalSet::from_intervals(many.iter().copied()).unwrap_or_default()),
+        }
     }
 
     /// The interval set of each block the ray meets, with intervals inside
@@ -206,11 +279,11 @@ impl Complex {
         let rb = RayBoxes::new(ray);
         let mut t_max = max_t;
         self.bvh.traverse(&rb, 0.0, &mut t_max, |k, _, _| {
-            let (i, sp) = (self.kernel.block(k), self.kernel.spans(k, ray, &self.blocks));
+            let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
             push(i, &sp)
         });
         for i in self.unbounded_crossed(&rb, 0.0, max_t) {
-            push(i, &self.blocks[i as usize].spans(ray));
+            push(i, &self.block_spans(i, ray, &rb));
         }
         out.sort_unstable_by_key(|(id, _)| *id);
     }
@@ -300,39 +373,34 @@ impl Complex {
         }
         let eps = self.epsilon;
         let rb = RayBoxes::new(ray);
-        // Inside the union just after ε (the same probe as `cast_opaque`): the
-        // answer is whether the run ends within `max_t`.
+        // One walk answers both questions: is the ray inside the union just
+        // after ε (then the answer is whether that run ends within `max_t`),
+        // and does it enter a block in `(ε, max_t]` (then, from outside, it
+        // is stopped: the nearest entry is one, and every entry is at or
+        // after it). Once an entry is found only the inside-probe is left:
+        // `t_max = ε` keeps just the boxes that hold the ray at ε.
         let mut run_end = eps;
-        let mut probe = |spans: &Spans| {
+        let mut found = false;
+        let mut look = |spans: &Spans, t_max: &mut f64| {
             for iv in spans.as_slice() {
-                if iv.enter.t <= eps && eps < iv.exit.t {
-                    run_end = run_end.max(iv.exit.t);
+                if iv.enter.t <= eps {
+                    if eps < iv.exit.t {
+                        run_end = run_end.max(iv.exit.t);
+                    }
+                } else if iv.enter.t <= max_t {
+                    found = true;
+                    *t_max = eps;
                 }
             }
         };
-        let mut t_probe = eps;
-        self.bvh.traverse(&rb, eps, &mut t_probe, |k, _, _| probe(&self.kernel.spans(k, ray, &self.blocks)));
-        for i in self.unbounded_crossed(&rb, eps, eps) {
-            probe(&self.blocks[i as usize].spans(ray));
+        let mut t_max = max_t;
+        for i in self.unbounded_crossed(&rb, eps, max_t) {
+            look(&self.block_spans(i, ray, &rb), &mut t_max);
         }
+        self.bvh.traverse(&rb, eps, &mut t_max, |k, _, t_max| look(&self.slot_spans(k, ray, &rb), t_max));
         if run_end > eps {
             return self.run_exit(ray, &rb, run_end, max_t).is_some();
         }
-        // Outside: any entry in `(ε, max_t]` is a hit (the nearest entry is
-        // one, and every entry is at or after it).
-        let enters = |spans: &Spans| spans.as_slice().iter().any(|iv| iv.enter.t > eps && iv.enter.t <= max_t);
-        if self.unbounded_crossed(&rb, eps, max_t).any(|i| enters(&self.blocks[i as usize].spans(ray))) {
-            return true;
-        }
-        let mut found = false;
-        let mut t_max = max_t;
-        self.bvh.traverse(&rb, eps, &mut t_max, |k, _, t_max| {
-            if enters(&self.kernel.spans(k, ray, &self.blocks)) {
-                found = true;
-                // Cuts off every remaining box.
-                *t_max = f64::NEG_INFINITY;
-            }
-        });
         found
     }
 
@@ -350,7 +418,7 @@ impl Complex {
             let after = self.owner_after(ray, &rb, t);
             if after != before {
                 if self.visible_change(before, after) {
-                    if let Some(hit) = self.event_hit(ray, t, before, after) {
+                    if let Some(hit) = self.event_hit(ray, &rb, t, before, after) {
                         return Some(hit);
                     }
                 }
@@ -372,11 +440,11 @@ impl Complex {
         };
         let mut t_hi = t;
         self.bvh.traverse(rb, t, &mut t_hi, |k, _, _| {
-            let (i, sp) = (self.kernel.block(k), self.kernel.spans(k, ray, &self.blocks));
+            let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
             consider(i, &sp)
         });
         for i in self.unbounded_crossed(rb, t, t) {
-            consider(i, &self.blocks[i as usize].spans(ray));
+            consider(i, &self.block_spans(i, ray, &rb));
         }
         [opaque, transparent].into_iter().find(|&i| i != u32::MAX).map(BlockId)
     }
@@ -396,10 +464,10 @@ impl Complex {
         };
         let mut t_max = max_t;
         for i in self.unbounded_crossed(rb, tau, max_t) {
-            consider(i, &self.blocks[i as usize].spans(ray), &mut t_max);
+            consider(i, &self.block_spans(i, ray, &rb), &mut t_max);
         }
         self.bvh.traverse(rb, tau, &mut t_max, |k, _, t_max| {
-            let (i, sp) = (self.kernel.block(k), self.kernel.spans(k, ray, &self.blocks));
+            let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
             consider(i, &sp, t_max)
         });
         best
@@ -419,15 +487,22 @@ impl Complex {
 
     /// The hit at a change of owner at `t`: the entry of the new owner if it
     /// starts there, else the exit of the old one (as in the partition).
-    fn event_hit(&self, ray: &Ray, t: f64, before: Option<BlockId>, after: Option<BlockId>) -> Option<Hit> {
+    fn event_hit(
+        &self,
+        ray: &Ray,
+        rb: &RayBoxes,
+        t: f64,
+        before: Option<BlockId>,
+        after: Option<BlockId>,
+    ) -> Option<Hit> {
         let entry = after.and_then(|id| {
-            let set = self.blocks[id.index()].spans(ray);
+            let set = self.block_spans(id.0, ray, rb);
             let solid = set.as_slice().iter().find(|iv| iv.enter.t == t)?.enter.solid()?;
             Some(self.hit(ray, t, id.0, solid, true))
         });
         entry.or_else(|| {
             let id = before?;
-            let set = self.blocks[id.index()].spans(ray);
+            let set = self.block_spans(id.0, ray, rb);
             let solid = set.as_slice().iter().find(|iv| iv.exit.t == t)?.exit.solid()?;
             Some(self.hit(ray, t, id.0, solid, false))
         })
@@ -437,33 +512,27 @@ impl Complex {
     fn cast_opaque(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
         let eps = self.epsilon;
         let rb = RayBoxes::new(ray);
-        // Is the ray inside the union just after ε? Then the answer is the end
-        // of the run of overlapping intervals it is in.
+        // One front-to-back walk with early exit finds the nearest entry
+        // after ε (lowest block id on ties: the owner after the event) and
+        // whether the ray is inside the union just after ε: then the answer
+        // is the end of the run of overlapping intervals it is in. The boxes
+        // holding the ray at ε enter at or before ε, before any entry found,
+        // so the shrinking `t_max` never cuts them off.
         let mut run_end = eps;
-        let mut probe = |_: u32, spans: &Spans| {
-            for iv in spans.as_slice() {
-                if iv.enter.t <= eps && eps < iv.exit.t {
-                    run_end = run_end.max(iv.exit.t);
-                }
-            }
-        };
-        let mut t_probe = eps;
-        self.bvh.traverse(&rb, eps, &mut t_probe, |k, _, _| {
-            let (i, sp) = (self.kernel.block(k), self.kernel.spans(k, ray, &self.blocks));
-            probe(i, &sp)
-        });
-        for i in self.unbounded_crossed(&rb, eps, eps) {
-            probe(i, &self.blocks[i as usize].spans(ray));
-        }
-        if run_end > eps {
-            return self.run_exit(ray, &rb, run_end, max_t);
-        }
-        // Outside: the nearest entry after ε, lowest block id on ties (the
-        // owner after the event).
         // `(t, block, solid, BVH slot)`.
         let mut best: Option<(f64, u32, u32, Option<u32>)> = None;
         let mut consider = |i: u32, k: Option<u32>, spans: &Spans, t_max: &mut f64| {
-            if let Some(iv) = spans.as_slice().iter().find(|iv| iv.enter.t > eps) {
+            let mut entry = None;
+            for iv in spans.as_slice() {
+                if iv.enter.t <= eps {
+                    if eps < iv.exit.t {
+                        run_end = run_end.max(iv.exit.t);
+                    }
+                } else if entry.is_none() && iv.enter.t > eps {
+                    entry = Some(iv);
+                }
+            }
+            if let Some(iv) = entry {
                 let t = iv.enter.t;
                 if t <= *t_max && best.map_or(true, |(bt, bi, _, _)| t < bt || (t == bt && i < bi)) {
                     best = Some((t, i, iv.enter.solid, k));
@@ -473,12 +542,15 @@ impl Complex {
         };
         let mut t_max = max_t;
         for i in self.unbounded_crossed(&rb, eps, max_t) {
-            consider(i, None, &self.blocks[i as usize].spans(ray), &mut t_max);
+            consider(i, None, &self.block_spans(i, ray, &rb), &mut t_max);
         }
         self.bvh.traverse(&rb, eps, &mut t_max, |k, _, t_max| {
-            let (i, sp) = (self.kernel.block(k), self.kernel.spans(k, ray, &self.blocks));
+            let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
             consider(i, Some(k), &sp, t_max)
         });
+        if run_end > eps {
+            return self.run_exit(ray, &rb, run_end, max_t);
+        }
         let (t, block, solid, slot) = best?;
         // The normal from the packed copy of the solid, which the test just
         // read (the block's own copy is likely out of the caches by now).
@@ -513,11 +585,11 @@ impl Complex {
             };
             let mut t_hi = run_end;
             self.bvh.traverse(rb, self.epsilon, &mut t_hi, |k, _, _| {
-                let (i, sp) = (self.kernel.block(k), self.kernel.spans(k, ray, &self.blocks));
+                let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
                 extend(i, &sp)
             });
             for i in self.unbounded_crossed(rb, self.epsilon, run_end) {
-                extend(i, &self.blocks[i as usize].spans(ray));
+                extend(i, &self.block_spans(i, ray, &rb));
             }
             if next > run_end {
                 if next > max_t {

@@ -1,9 +1,10 @@
 //! Minimised inputs from the `complex_queries` fuzz target (`fuzz/`), one
 //! test each: the shape of the input that failed and the law it broke.
 
-use complex::BlockId;
-use quadric::nalgebra::Point3;
-use quadric::{Quadric, Solid, Transform};
+use complex::{BlockId, Complex};
+use proptest::prelude::*;
+use quadric::nalgebra::{Point3, Vector3};
+use quadric::{strategies, Quadric, Ray, Solid, Transform};
 
 use crate::common::*;
 
@@ -99,10 +100,11 @@ fn cast_ray_finds_an_exit_just_outside_the_exact_box() {
 /// gives a sliver of length 6e-8 around the crossing (the square root of a
 /// rounding-level discriminant), which lies outside the block's exact box
 /// (`|y| <=` 1e-308). The partition (which meets the box at the crossing)
-/// has the sliver's events; `cast_ray` with a transparent block present
-/// probes the boxes at the sliver's ends and misses it.
+/// had the sliver's events; `cast_ray` with a transparent block present
+/// probed the boxes at the sliver's ends and missed it. Every query now reads
+/// a block's set clipped to its box (`Complex::block_intervals`), so both
+/// see the same (clipped) sliver.
 #[test]
-#[ignore = "open: cast_ray's box probes miss intervals the kernel puts outside a block's exact box (sqrt-ε slivers)"]
 fn cast_ray_agrees_with_the_partition_on_a_zero_thickness_slab() {
     let slab = vec![Solid::from(
         Quadric::from_coefficients([0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).expect("finite"),
@@ -113,4 +115,114 @@ fn cast_ray_agrees_with_the_partition_on_a_zero_thickness_slab() {
     let p = c.partition(&r);
     let first = p.events.iter().find(|e| e.t > c.epsilon() && c.is_visible(e)).map(|e| (e.t, e.surface.block));
     assert_eq!(c.cast_ray(&r, f64::INFINITY).map(|h| (h.t, h.block)), first, "{p:?}");
+}
+
+/// A transparent block that is a huge capped tube: `x² + z² <= 1` with
+/// `y <= 0` (and `y <= 2`), scaled by -1.35e28 (so it becomes `y >= 12`
+/// after the move by (4, 12, 4), with a radius of 1.35e28). The plane `y = 0`
+/// was first moved 59 along itself, so its reference point ends up 8e29 away
+/// (in z); the half-space kernel is accurate to the ulps of that distance
+/// (1e14), and it put the ray origin (y = 0) inside. The partition (which
+/// crosses the block's box from t = 0) then started inside the block and
+/// had only the exit at t = 1.36e28; `cast_ray`, probing the box (y >=
+/// 11.99…) at t = ε, found the ray outside and returned nothing. With the
+/// sets clipped to the boxes both see the entry at y = 12 (t = 4√409, to the
+/// box's widening) and then the exit.
+#[test]
+fn cast_ray_and_partition_agree_on_a_far_referenced_half_space() {
+    let m = Transform::scale(-1.3476555094338099e28).expect("finite").then(&translate(4.0, 12.0, 4.0));
+    let solids = vec![
+        Solid::from(Quadric::tube_y()),
+        hs(0.0, 1.0, 0.0, -2.0),
+        hs(0.0, 1.0, 0.0, 0.0).transformed(&translate(0.0, 0.0, -59.0)),
+    ];
+    let c = complex(vec![block("huge", moved(&solids, &m), T, 3)]);
+    let r = ray([0.0, 0.0, 0.046875], [0.0, 3.0, -20.0]);
+    let p = c.partition(&r);
+    let visible: Vec<_> = p.events.iter().filter(|e| e.t > c.epsilon() && c.is_visible(e)).collect();
+    let first = visible.first().map(|e| (e.t, e.surface.block, e.entering));
+    assert_eq!(c.cast_ray(&r, f64::INFINITY).map(|h| (h.t, h.block, h.entering)), first, "{p:?}");
+    // The exact geometry: y = 3t/√409 reaches 12 at t = 4√409.
+    let entry = 4.0 * 409f64.sqrt();
+    let [e0, e1] = visible[..] else { panic!("an entry and an exit: {p:?}") };
+    assert!(e0.entering && (e0.t - entry).abs() <= 1e-9 * entry, "entry {e0:?}, want t = {entry}");
+    assert_eq!(e0.surface.solid, 2, "the entry is on the plane y = 12: {e0:?}");
+    assert!(!e1.entering && (e1.t / 1.3627322987218422e28 - 1.0).abs() <= 1e-9, "exit {e1:?}");
+    assert_eq!(c.contains_point(&r.at(1.0)), None, "the ray starts below y = 12");
+}
+
+/// The two bugs above are one class: the kernel puts part of a block's set
+/// outside the block's exact box (a √ε sliver of a degenerate quadric, a
+/// crossing of a half-space whose reference point is far away), and a query
+/// that probes the boxes disagreed with one that does not.
+fn box_escaping_solid() -> impl Strategy<Value = Solid> {
+    let axis = 0usize..3;
+    // `x_i² <= 0` (or a slab of half-width 1e-9), placed anywhere.
+    let slab = (axis.clone(), any::<bool>(), strategies::transform()).prop_map(|(i, thin, m)| {
+        let mut c = [0.0; 10];
+        c[i] = 1.0;
+        c[9] = if thin { -1e-18 } else { 0.0 };
+        Solid::from(Quadric::from_coefficients(c).expect("finite").transformed(&m))
+    });
+    // An axis-aligned plane near the origin with its reference point moved
+    // 10^k along the plane (which leaves the plane where it is), then scaled.
+    let far_plane = (axis, 1usize..3, any::<bool>(), -3.0f64..3.0, 10i32..30, -2i32..3, any::<bool>()).prop_map(
+        |(i, j, up, d, k, e, flip)| {
+            let mut n = [0.0; 3];
+            n[i] = if up { 1.0 } else { -1.0 };
+            let mut v = Vector3::zeros();
+            v[(i + j) % 3] = 10f64.powi(k);
+            let s = 10f64.powi(e) * if flip { -1.0 } else { 1.0 };
+            let m = Transform::translate(v).expect("finite").then(&Transform::scale(s).expect("finite"));
+            hs(n[0], n[1], n[2], d).transformed(&m)
+        },
+    );
+    prop_oneof![slab, far_plane, strategies::solid()]
+}
+
+/// `cast_ray` against the first visible event of the partition, and
+/// `occluded` against `cast_ray`.
+fn check_cast_against_partition(c: &Complex, r: &Ray) -> Result<(), TestCaseError> {
+    let p = c.partition(r);
+    prop_assert_eq!(p.events.len() + 1, p.segments.len(), "{:?}", p);
+    let first = p.events.iter().find(|e| e.t > c.epsilon() && c.is_visible(e));
+    let want = first.map(|e| (e.t, e.surface.block, e.surface.solid, e.entering));
+    let hit = c.cast_ray(r, f64::INFINITY);
+    prop_assert_eq!(hit.map(|h| (h.t, h.block, h.solid, h.entering)), want, "{:?}", p);
+    prop_assert_eq!(c.occluded(r, f64::INFINITY), want.is_some());
+    for (id, set) in c.intervals(r) {
+        let b = c.block_aabb(id);
+        for iv in &set {
+            for t in [iv.enter.t, iv.exit.t].into_iter().filter(|t| t.is_finite()) {
+                // The box (grown by its pad of 1e-13 of the ray origin and a
+                // few ulps of the slab test) holds every finite end.
+                let x = r.at(t);
+                let pad = 1e-12 * (1.0 + r.origin().coords.amax() + x.coords.amax());
+                let inside = (0..3).all(|k| b.min[k] - pad <= x[k] && x[k] <= b.max[k] + pad);
+                prop_assert!(inside, "end {} of block {:?} at {:?} outside its box {:?}", t, id, x, b);
+            }
+        }
+    }
+    Ok(())
+}
+
+proptest! {
+    #[test]
+    fn cast_ray_and_partition_agree_when_the_kernel_leaves_a_box(
+        blocks in proptest::collection::vec(
+            (proptest::collection::vec(box_escaping_solid(), 1..=3), any::<bool>(), 0u32..2), 1..=4),
+        rays in proptest::collection::vec(strategies::ray(20.0), 4),
+    ) {
+        let blocks = blocks
+            .into_iter()
+            .enumerate()
+            .filter_map(|(i, (solids, t, m))| {
+                complex::Block::new(format!("b{i}"), solids, if t { T } else { O }, complex::MaterialKey(m)).ok()
+            })
+            .collect();
+        let c = Complex::new(blocks, complex::ComplexOptions::default()).expect("valid");
+        for r in &rays {
+            check_cast_against_partition(&c, r)?;
+        }
+    }
 }

@@ -12,12 +12,20 @@
 //! - *stable + FMA*: the same world-space coefficients, `t² - su` by a fused
 //!   difference of products and the stable root pair;
 //! - *ours*: `Quadric::intervals`.
+//!
+//! `--modes` prints instead the table of the precision modes
+//! (`Precision::{Fast, Accurate, Certified}`): error and cost of each on the
+//! same rays (`docs/quadric.md`, "Precision modes"):
+//!
+//! ```text
+//! cargo run --release -p quadric --example accuracy -- --modes
+//! ```
 
 use std::hint::black_box;
 use std::time::Instant;
 
 use quadric::roots::{difference_of_products, stable_roots};
-use quadric::{Bound, IntervalSet, Ray};
+use quadric::{Bound, IntervalSet, Precision, Ray};
 use reference::{median_max, other_shapes, unit_sphere, Judge, Rng, Scene, Shape, Tally};
 
 const SEED: u64 = 0x4b6f_6d70_6c65_7801;
@@ -278,6 +286,10 @@ fn main() {
     println!("FH / FM: rays with more / fewer surface crossings than the exact answer.");
     println!();
 
+    if std::env::args().any(|a| a == "--modes") {
+        print_modes();
+        return;
+    }
     // `--cost` skips the accuracy tables (quick timing runs).
     let cost_only = std::env::args().any(|a| a == "--cost");
     let mut rng = Rng::new(SEED);
@@ -339,5 +351,85 @@ fn print_cost(timing: &[(f64, Scene, Vec<Ray>)]) {
         );
         let (naive, stable, ours) = (t[0], t[1], t[2]);
         println!("| {distance:.0e} | {naive:.1} | {stable:.1} | {ours:.1} | {:.2} |", ours / naive);
+    }
+}
+
+const MODES: [(Precision, &str); 3] =
+    [(Precision::Fast, "Fast"), (Precision::Accurate, "Accurate (default)"), (Precision::Certified, "Certified")];
+
+/// Error and cost of each precision mode on the same rays: every shape at
+/// every distance, the camera near the origin.
+fn print_modes() {
+    let mut rng = Rng::new(SEED ^ 0x6d6f_6465);
+    let mut shapes = vec![unit_sphere()];
+    shapes.extend(other_shapes());
+    println!("### Precision modes: hit-point error in U (max over all shapes), worst error / rounding floor, false hits + misses");
+    println!();
+    println!("| D | rays (hit) | floor max (U) | {} |", MODES.map(|(_, n)| format!("{n}: max U, max / floor, FH + FM (unexcused)")).join(" | "));
+    println!("|---|---|---|---|---|---|");
+    let mut timing = Vec::new();
+    for distance in [1.0, 1e3, 1e6, 1e9] {
+        let mut floor = Tally::default();
+        let mut tallies: Vec<Tally> = MODES.iter().map(|_| Tally::default()).collect();
+        let (mut rays_total, mut hits) = (0, 0);
+        // Worst ratio per scene (the floor is per scene: shapes differ in scale).
+        let mut worst_ratio = [0.0f64; 3];
+        for shape in &shapes {
+            let scene = Scene::new(shape, distance, &mut rng);
+            let rays = scene.rays(shape, CAMERA * distance.min(1.0), SHAPE_RAYS, &mut rng);
+            let mut scene_floor = Tally::default();
+            let mut scene_modes: Vec<Tally> = MODES.iter().map(|_| Tally::default()).collect();
+            for ray in &rays {
+                let exact = scene.exact.solve(ray);
+                hits += usize::from(!exact.crossings().is_empty());
+                scene_floor.add_floor(&scene, ray, &exact);
+                floor.add_floor(&scene, ray, &exact);
+                for (k, (mode, _)) in MODES.iter().enumerate() {
+                    let set = scene.solid.intervals_with(ray, 0, *mode);
+                    scene_modes[k].add(&scene, ray, &exact, &set, &JUDGE);
+                    tallies[k].add(&scene, ray, &exact, &set, &JUDGE);
+                }
+            }
+            let (_, fmax) = median_max(&scene_floor.size_units);
+            for k in 0..3 {
+                let (_, m) = median_max(&scene_modes[k].size_units);
+                worst_ratio[k] = worst_ratio[k].max(m / fmax);
+            }
+            rays_total += rays.len();
+            if shape.name == "unit sphere" {
+                timing.push((distance, scene, rays));
+            }
+        }
+        let (_, fmax) = median_max(&floor.ulps);
+        let cells: Vec<String> = (0..3)
+            .map(|k| {
+                let t = &tallies[k];
+                let (_, m) = median_max(&t.ulps);
+                format!("{m:.2}, {:.2}, {} ({})", worst_ratio[k], t.false_hits + t.false_misses, t.unexcused)
+            })
+            .collect();
+        println!("| {distance:.0e} | {rays_total} ({hits}) | {fmax:.2} | {} |", cells.join(" | "));
+    }
+    println!();
+    let load =
+        std::fs::read_to_string("/proc/loadavg").ok().and_then(|l| l.split_whitespace().next().map(String::from));
+    println!(
+        "### Precision modes: cost, ns per call (unit sphere rays, best of {COST_ROUNDS} interleaved rounds; load average {})",
+        load.as_deref().unwrap_or("unknown")
+    );
+    println!();
+    println!("| D | Fast | Accurate (default) | Certified | Accurate / Fast | Certified / Fast |");
+    println!("|---|---|---|---|---|---|");
+    for (distance, scene, rays) in &timing {
+        let rays = &rays[..rays.len().min(4096)];
+        let t = time_kernels(
+            rays,
+            &[
+                &|r: &Ray| scene.solid.intervals_with(r, 0, Precision::Fast),
+                &|r: &Ray| scene.solid.intervals_with(r, 0, Precision::Accurate),
+                &|r: &Ray| scene.solid.intervals_with(r, 0, Precision::Certified),
+            ],
+        );
+        println!("| {distance:.0e} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} |", t[0], t[1], t[2], t[1] / t[0], t[2] / t[0]);
     }
 }

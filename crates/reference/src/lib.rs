@@ -11,8 +11,15 @@
 //! double point are *exact* dyadic rationals here ([`Big`]): every hit/miss
 //! decision of the reference is exact. Only square roots and quotients are
 //! rounded, to [`PRECISION`] bits.
+//!
+//! [`csg`] extends this to blocks (intersections of the exact sets of their
+//! solids) and complexes (the union with the priority partition of SPEC §3),
+//! with every root held exactly so that ties between solids are exact too.
 
 #![deny(missing_docs)]
+
+pub mod csg;
+pub use csg::{block_set, intersect, solid_set, End as ExactEnd, ExactBlock, ExactPartition, ExactSegment, ExactSet, Root};
 
 use num_bigint::{BigInt, Sign};
 use quadric::{HalfSpace, IntervalSet, Quadric, Ray, Solid, NO_SOLID};
