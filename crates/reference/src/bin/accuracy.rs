@@ -7,6 +7,9 @@
 //! cargo run --release -p reference --features bench --bin accuracy [-- --quick] [--png PATH]
 //! ```
 //!
+//! `-- --secondary [--fast]` runs only the secondary-ray count (with
+//! `ACCURACY_VERBOSE=1` it prints every failure): a diagnostic.
+//!
 //! Rows: `Fast`, `Accurate` (the default) and `Certified` of
 //! [`quadric::Precision`], and *textbook*: world-space coefficients,
 //! `(-t ± √(t² - su)) / s`, hits closer than `1e-4` ignored and objects
