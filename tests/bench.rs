@@ -64,7 +64,12 @@ fn bench_counts_primary_and_all_rays() {
         let (p, a): (f64, f64) = (f[7].parse().unwrap(), f[8].parse().unwrap());
         assert!(p > 0.0 && a > p, "{line}");
     }
-    // Half a size is an error, not a silent default.
-    let o = komplex(dir.path(), &["bench", table.to_str().unwrap(), "--width", "32"]);
+    // One side alone keeps the scene's aspect ratio (640x480), as for `render`.
+    let o = komplex(dir.path(), &["bench", table.to_str().unwrap(), "--width", "32", "--threads", "1"]);
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    assert_eq!(text.lines().nth(1).and_then(|l| l.split_whitespace().nth(3)), Some("32x24"), "{text}");
+    // A zero side is an input error, not a silent default.
+    let o = komplex(dir.path(), &["bench", table.to_str().unwrap(), "--height", "0"]);
     assert_eq!(o.status.code(), Some(1));
 }
