@@ -226,3 +226,21 @@ proptest! {
         }
     }
 }
+
+/// A rotated tube is an ideal cylinder (it carries its axis, see
+/// `Quadric::axis`) although its stored `A` is slightly definite: its box
+/// must be unbounded along the axis, or clipping the sets to the box would
+/// close it ~10⁸ out.
+#[test]
+fn a_rotated_tube_keeps_an_unbounded_box_and_its_far_exit() {
+    let m = Transform::rotate_x_degrees(30.0).expect("finite");
+    let c = complex(vec![block("tube", vec![Solid::from(Quadric::tube_z().transformed(&m))], O, 0)]);
+    let b = c.block_aabb(BlockId(0));
+    assert!(b.min.y == f64::NEG_INFINITY && b.max.z == f64::INFINITY, "{b:?}");
+    let (axis, across) = (m.apply_vector(&Vector3::z()), m.apply_vector(&Vector3::y()));
+    let dir = Vector3::x() + axis * 0.3;
+    let r = Ray::new(Point3::from(axis * 1e9 + across * 0.5), dir).expect("valid ray");
+    let expected = 0.75f64.sqrt() * dir.norm();
+    let hit = c.cast_ray(&r, f64::INFINITY).expect("the ray leaves the tube");
+    assert!(!hit.entering && (hit.t - expected).abs() < 16.0 * f64::EPSILON * 1e9, "{hit:?} vs {expected}");
+}
