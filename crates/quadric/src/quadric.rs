@@ -255,7 +255,7 @@ impl Quadric {
         }
     }
 
-    /// Whether `d` is along the null axis beyond [`AXIS_SLIDE_RATIO`] times
+    /// Whether `d` is along the null axis beyond 2²⁰ times
     /// its distance from it: `(n·d)² > (1 - 2⁻⁴⁰) |n|²|d|²` (false without an axis).
     #[inline(always)]
     fn far_along_axis(&self, d: &Vector3<f64>) -> bool {
