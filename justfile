@@ -24,7 +24,8 @@ lint:
 
 # Fuzz the kernel: each cargo-fuzz target for `seconds` (default 30), on
 # stable Rust (`cargo install cargo-fuzz`; no nightly: `--sanitizer none`),
-# with debug assertions, from the committed seeds (regenerated first). A
+# with debug assertions, from the committed seeds (regenerated first) and
+# the kept crash inputs of fuzz/regressions/<target>/ (replayed first). A
 # crash stops the recipe and leaves its input in fuzz/artifacts/<target>/.
 # RUSTFLAGS replaces .cargo/config.toml's flags, so FMA is asked for again.
 fuzz-kernel seconds="30":
@@ -32,7 +33,8 @@ fuzz-kernel seconds="30":
     for t in quadric_intervals complex_queries; do \
         mkdir -p fuzz/corpus/$t && \
         RUSTFLAGS="{{ if arch() == "x86_64" { "-Ctarget-feature=+fma" } else { "" } }}" \
-        cargo fuzz run --sanitizer none --debug-assertions $t fuzz/corpus/$t fuzz/seeds/$t -- \
+        cargo fuzz run --sanitizer none --debug-assertions $t fuzz/corpus/$t fuzz/seeds/$t \
+            $(test -d fuzz/regressions/$t && echo fuzz/regressions/$t) -- \
             -max_total_time={{ seconds }} -print_final_stats=1 || exit 1; \
     done
 

@@ -643,7 +643,18 @@ fn narrow_quadric(bx: &mut Aabb, q: &quadric::Quadric) {
             cmag += term.0.abs();
             *cc = cc.add(term);
         };
+        // What rounding `dⱼ = xⱼ - cⱼ` at the absolute coordinates (a few
+        // ulps of `eⱼ`) can move `B` and `C` by, unscaled: far from the
+        // origin it swamps the terms' own magnitudes (a huge sphere touching
+        // the box, whose `C` cancels to rounding noise).
+        let e = |j: usize| finite_or_zero(c[j].abs() + magnitude(bx, j));
+        let mut b_abs = 0.0;
+        let mut c_abs = 2.0
+            * a[(others[0], others[1])].abs()
+            * (dj(others[0]).mag() * e(others[1]) + dj(others[1]).mag() * e(others[0]));
         for &j in &others {
+            b_abs += a[(i, j)].abs() * e(j);
+            c_abs += 2.0 * (a[(j, j)].abs() * dj(j).mag() + w[j].abs()) * e(j);
             b = b.add(dj(j).scale(a[(i, j)]));
             add_c(&mut cc, dj(j).square().scale(a[(j, j)]));
             add_c(&mut cc, dj(j).scale(2.0 * w[j]));
@@ -666,8 +677,10 @@ fn narrow_quadric(bx: &mut Aabb, q: &quadric::Quadric) {
             let scale = (b.mag() + (aii * cmag).sqrt()) / aii;
             match (roots(blo), roots(bhi)) {
                 (None, None) => {
-                    // Only claim emptiness when it is not a rounding artefact.
-                    let margin = 1e-9 * (blo * blo + bhi * bhi + (aii * clo).abs());
+                    // Only claim emptiness when it is not a rounding artefact:
+                    // of the terms of `C` (`cmag`), and of the `dⱼ` (`c_abs`).
+                    let margin = 1e-9 * (blo * blo + bhi * bhi + aii * cmag)
+                        + WIDEN_ABS * (2.0 * b.mag() * b_abs + aii * finite_or_zero(c_abs));
                     if blo * blo - aii * clo < -margin && bhi * bhi - aii * clo < -margin {
                         *bx = Aabb::EMPTY;
                         return;

@@ -226,3 +226,48 @@ proptest! {
         }
     }
 }
+
+/// A rotated tube is an ideal cylinder (it carries its axis, see
+/// `Quadric::axis`) although its stored `A` is slightly definite: its box
+/// must be unbounded along the axis, or clipping the sets to the box would
+/// close it ~10⁸ out.
+#[test]
+fn a_rotated_tube_keeps_an_unbounded_box_and_its_far_exit() {
+    let m = Transform::rotate_x_degrees(30.0).expect("finite");
+    let c = complex(vec![block("tube", vec![Solid::from(Quadric::tube_z().transformed(&m))], O, 0)]);
+    let b = c.block_aabb(BlockId(0));
+    assert!(b.min.y == f64::NEG_INFINITY && b.max.z == f64::INFINITY, "{b:?}");
+    let (axis, across) = (m.apply_vector(&Vector3::z()), m.apply_vector(&Vector3::y()));
+    let dir = Vector3::x() + axis * 0.3;
+    let r = Ray::new(Point3::from(axis * 1e9 + across * 0.5), dir).expect("valid ray");
+    let expected = 0.75f64.sqrt() * dir.norm();
+    let hit = c.cast_ray(&r, f64::INFINITY).expect("the ray leaves the tube");
+    assert!(!hit.entering && (hit.t - expected).abs() < 16.0 * f64::EPSILON * 1e9, "{hit:?} vs {expected}");
+}
+
+/// Found by `complex_queries` after the fixes above (2026-11-30): the block
+/// box must hold every point of the block. The origin lies on a sphere of
+/// radius 8.2e35 centred 8.2e35 away (rotated by 8.2e35° twice), inside a
+/// tube along y and on a half-space's plane. Narrowing the tube's box by the
+/// sphere, `C = k + a Σ dⱼ²` cancels to rounding noise (`dⱼ ≈ 8e35` rounded
+/// at 1e20), and the emptiness margin was relative to `|a C|` itself, not to
+/// the magnitudes `C` was formed from: the box came out empty.
+#[test]
+fn the_box_holds_a_point_on_a_huge_sphere() {
+    let rot = Transform::rotate_y_degrees(8.224e35).expect("finite");
+    let place = rot.then(&rot);
+    let solids = vec![
+        Solid::from(Quadric::tube_y()),
+        hs(0.0, 1.0, 52.0, 0.0).complement().transformed(
+            &Transform::rotate_x_degrees(2.0).expect("finite").then(&translate(3.0, 0.0, 3.3402806000149546e-294)),
+        ),
+        Solid::from(
+            Quadric::sphere().transformed(&translate(0.0, 0.0, 1.0).then(&Transform::scale(8.224e35).expect("finite"))),
+        ),
+    ];
+    let c = complex(vec![block("b", moved(&solids, &place), O, 0)]);
+    let o = Point3::origin();
+    assert!(c.block(BlockId(0)).contains_point(&o));
+    assert!(c.block_aabb(BlockId(0)).contains_point(&o), "{:?}", c.block_aabb(BlockId(0)));
+    assert_eq!(c.contains_point(&o), Some(BlockId(0)));
+}

@@ -3,7 +3,9 @@
 use nalgebra::{Matrix3, Matrix4, Point3, Vector3};
 
 use crate::interval::{Bound, IntervalSet};
-use crate::roots::{difference_of_products, dot2, exact_sign_of_sum, stable_roots, two_sum_error};
+use crate::roots::{
+    difference_of_products, dot2, exact_sign_of_sum, stable_roots, two_product, two_sum, two_sum_error,
+};
 use crate::{GeometryError, Ray, Transform};
 
 // The precision modes (a child module: they read the private parts).
@@ -41,6 +43,12 @@ pub struct Quadric {
     /// Below this `|s|` the ray is nearly along a flat direction of `A` and
     /// `s`, `t` are recomputed compensated (`max |A_ij| / 16`).
     flat: f64,
+    /// The exact null axis `n` of an ideal cylinder (zero if none): the
+    /// solid is invariant along `n` (`A n = 0`, `w·n = 0` for the quadric it
+    /// was built as), carried through transforms as `L n`, where rounding
+    /// leaves the stored `A` slightly definite along it. Queries far along
+    /// it slide the point along `n` first (see [`Quadric::axis`]).
+    axis: Vector3<f64>,
 }
 
 impl Quadric {
@@ -57,7 +65,7 @@ impl Quadric {
         } else {
             None
         };
-        Self::with_definiteness(centre, a, w, k, definite)
+        Self::with_definiteness(centre, a, w, k, definite, exact_axis(&a, &w))
     }
 
     fn with_definiteness(
@@ -66,6 +74,7 @@ impl Quadric {
         w: Vector3<f64>,
         k: f64,
         definite: Option<bool>,
+        axis: Vector3<f64>,
     ) -> Self {
         let m = a.amax().max(w.amax()).max(k.abs());
         let (a, w, k) = if !(m > 0.0 && m.is_finite()) || (1.0..2.0).contains(&m) {
@@ -76,7 +85,9 @@ impl Quadric {
             let (f1, f2) = (pow2(-e / 2), pow2(-e - (-e / 2)));
             (a * f1 * f2, w * f1 * f2, k * f1 * f2)
         };
-        Quadric { centre, a, w, k, definite, flat: a.amax() / 16.0 }
+        let axis =
+            if axis.iter().all(|x| x.is_finite()) && axis.amax() > 0.0 { axis / axis.amax() } else { Vector3::zeros() };
+        Quadric { centre, a, w, k, definite, flat: a.amax() / 16.0, axis }
     }
 
     fn diagonal(a: f64, b: f64, c: f64, k: f64) -> Self {
@@ -160,25 +171,42 @@ impl Quadric {
 
     /// The other side of the surface, `-Q` (exact).
     pub fn complement(&self) -> Self {
-        Self::with_definiteness(self.centre, -self.a, -self.w, -self.k, self.definite.map(|psd| !psd))
+        Self::with_definiteness(self.centre, -self.a, -self.w, -self.k, self.definite.map(|psd| !psd), self.axis)
     }
 
     /// The solid moved by `m`: `M⁻ᵀ Q M⁻¹`, computed as `L⁻ᵀ A L⁻¹` for the
     /// quadratic part while the centre moves exactly by `m`. A congruence
     /// keeps `A`'s definiteness, so a convex solid stays convex even where
-    /// rounding leaves the stored `L⁻ᵀ A L⁻¹` an eigenvalue of `-ε`.
+    /// rounding leaves the stored `L⁻ᵀ A L⁻¹` an eigenvalue of `-ε`. A null
+    /// axis `n` (an ideal cylinder's) moves to `L n`, exactly the direction
+    /// the moved solid is invariant along, however rounding left `A`.
     pub fn transformed(&self, m: &Transform) -> Self {
         let li = m.linear_inverse();
         let a = li.transpose() * self.a * li;
         // Exact symmetry (the product is symmetric up to rounding only).
         let a = (a + a.transpose()) * 0.5;
         let w = li.transpose() * self.w;
-        Self::with_definiteness(m.apply_point(&Point3::from(self.centre)).coords, a, w, self.k, self.definite)
+        let axis = m.linear() * self.axis;
+        Self::with_definiteness(m.apply_point(&Point3::from(self.centre)).coords, a, w, self.k, self.definite, axis)
     }
 
     /// The local centre `c` the coefficients are taken around.
     pub fn centre(&self) -> Point3<f64> {
         Point3::from(self.centre)
+    }
+
+    /// The null axis `n` of an ideal cylinder, if the quadric is one: built
+    /// with `A n = 0` and `w·n = 0` exactly (`tube_x/y/z`, or coefficients
+    /// with a zero row of `A` and zero `w` there: an axis-aligned cylinder of
+    /// any cross-section), then moved (`n` becomes `L n`). The solid is
+    /// invariant along `n` by definition: `f(x)` is taken as `f(x - αn)` with
+    /// `α n` the component of `x - c` along `n` wherever that component
+    /// exceeds 2²⁰ times the rest (a point far along the axis), so that the
+    /// rounding of the moved `A` (slightly definite along `n`: a rotated tube
+    /// is stored as an ellipsoid ~10⁸ long) does not close the cylinder. Near
+    /// the centre the two agree to rounding. Largest component ±1.
+    pub fn axis(&self) -> Option<Vector3<f64>> {
+        (self.axis != Vector3::zeros()).then_some(self.axis)
     }
 
     /// The quadratic part `A` (upper-left 3x3 of `Q`).
@@ -218,7 +246,45 @@ impl Quadric {
 
     /// `f(x)`, evaluated relative to the centre. The solid is `f <= 0`.
     pub fn value(&self, x: &Point3<f64>) -> f64 {
-        self.value_at_offset(&(x.coords - self.centre))
+        self.value_at_offset(&self.offset(x))
+    }
+
+    /// `x - c`, slid along the null axis when far along it (see [`Quadric::axis`]).
+    #[inline(always)]
+    fn offset(&self, x: &Point3<f64>) -> Vector3<f64> {
+        let d = x.coords - self.centre;
+        if self.far_along_axis(&d) {
+            self.slide(&d, &Vector3::zeros()).0
+        } else {
+            d
+        }
+    }
+
+    /// Whether `d` is along the null axis beyond 2²⁰ times
+    /// its distance from it: `(n·d)² > (1 - 2⁻⁴⁰) |n|²|d|²` (false without an axis).
+    #[inline(always)]
+    fn far_along_axis(&self, d: &Vector3<f64>) -> bool {
+        let nd = self.axis.dot(d);
+        nd != 0.0 && nd * nd > (1.0 - AXIS_SLIDE_RATIO_INV2) * (self.axis.norm_squared() * d.norm_squared())
+    }
+
+    /// `(d + lo) - αn` with `α = n·d / n·n`, as a double `d'` and its error
+    /// `lo'`: the product `αn` exactly (FMA) and the cancellation against
+    /// `d` exact (the two are close), so `d'` is right to its own ulps.
+    #[cold]
+    #[inline(never)]
+    fn slide(&self, d: &Vector3<f64>, lo: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+        let n = &self.axis;
+        let alpha = n.dot(d) / n.norm_squared();
+        let (mut out, mut out_lo) = (Vector3::zeros(), Vector3::zeros());
+        for i in 0..3 {
+            let (p, p_lo) = two_product(alpha, n[i]);
+            let (hi, hi_lo) = two_sum(d[i], -p);
+            let rest = hi_lo + (lo[i] - p_lo);
+            out[i] = hi + rest;
+            out_lo[i] = two_sum_error(hi, rest, out[i]);
+        }
+        (out, out_lo)
     }
 
     /// Whether `x` lies in the closed solid.
@@ -228,7 +294,7 @@ impl Quadric {
 
     /// The gradient `∇f(x) = 2 (A (x-c) + w)`, pointing out of the solid.
     pub fn gradient(&self, x: &Point3<f64>) -> Vector3<f64> {
-        2.0 * (self.a * (x.coords - self.centre) + self.w)
+        2.0 * (self.a * self.offset(x) + self.w)
     }
 
     /// The outward unit normal at `x` (the first three components of
@@ -297,6 +363,20 @@ impl Quadric {
             two_sum_error(p.y, -self.centre.y, d.y),
             two_sum_error(p.z, -self.centre.z, d.z),
         );
+        // Far along an ideal cylinder's axis: slide the origin along it (the
+        // line moves, `λ` does not), see `Quadric::axis`.
+        let (d, lo, lambda0, base) = if self.far_along_axis(&d) {
+            let (d, lo) = self.slide(&d, &lo);
+            let lambda0 = -r.dot(&d);
+            (
+                d,
+                lo,
+                lambda0,
+                Vector3::new(lambda0.mul_add(r.x, d.x), lambda0.mul_add(r.y, d.y), lambda0.mul_add(r.z, d.z)),
+            )
+        } else {
+            (d, lo, lambda0, base)
+        };
         let ar = self.a * r;
         let rw = r.dot(&self.w);
         let s = r.dot(&ar);
@@ -399,6 +479,27 @@ impl Quadric {
 /// (`Quadric::intervals`); well above the few ulps those terms are rounded
 /// to, so that every case that needs the apex is caught.
 const REBASE_MARGIN: f64 = 1.0 / (1u64 << 40) as f64;
+
+/// A point is "far along" a null axis when its component along the axis
+/// exceeds 2²⁰ times its distance from it ([`Quadric::axis`]); this is
+/// `2⁻⁴⁰`, the matching bound on `1 - cos²`. Below it the rounding of a
+/// moved `A` (`ε|A|` per entry) changes `f` by at most `2⁻¹²` of the
+/// distance term, about what the stored coefficients already carry.
+const AXIS_SLIDE_RATIO_INV2: f64 = 1.0 / (1u64 << 40) as f64;
+
+/// The exact null axis of `A` that `w` is orthogonal to, for the cases
+/// decided without rounding: exactly one zero row of `A` (an axis-aligned
+/// cylinder, elliptic, hyperbolic or parabolic-free) with `w` zero there.
+/// Zero otherwise (slabs have two null directions and no single axis).
+fn exact_axis(a: &Matrix3<f64>, w: &Vector3<f64>) -> Vector3<f64> {
+    let null = |i: usize| a.row(i).iter().all(|&x| x == 0.0) && w[i] == 0.0;
+    match (null(0), null(1), null(2)) {
+        (true, false, false) => Vector3::x(),
+        (false, true, false) => Vector3::y(),
+        (false, false, true) => Vector3::z(),
+        _ => Vector3::zeros(),
+    }
+}
 
 /// Whether the symmetric `m` is positive semi-definite, decided exactly: all
 /// seven principal minors are `>= 0` (for a symmetric matrix this is
