@@ -365,7 +365,10 @@ fn print_modes() {
     shapes.extend(other_shapes());
     println!("### Precision modes: hit-point error in U (max over all shapes), worst error / rounding floor, false hits + misses");
     println!();
-    println!("| D | rays (hit) | floor max (U) | {} |", MODES.map(|(_, n)| format!("{n}: max U, max / floor, FH + FM (unexcused)")).join(" | "));
+    println!(
+        "| D | rays (hit) | floor max (U) | {} |",
+        MODES.map(|(_, n)| format!("{n}: max U, max / floor, FH + FM (unexcused)")).join(" | ")
+    );
     println!("|---|---|---|---|---|---|");
     let mut timing = Vec::new();
     for distance in [1.0, 1e3, 1e6, 1e9] {
@@ -430,6 +433,13 @@ fn print_modes() {
                 &|r: &Ray| scene.solid.intervals_with(r, 0, Precision::Certified),
             ],
         );
-        println!("| {distance:.0e} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} |", t[0], t[1], t[2], t[1] / t[0], t[2] / t[0]);
+        println!(
+            "| {distance:.0e} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} |",
+            t[0],
+            t[1],
+            t[2],
+            t[1] / t[0],
+            t[2] / t[0]
+        );
     }
 }

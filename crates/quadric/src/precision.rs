@@ -177,7 +177,8 @@ impl HalfSpace {
     pub fn intervals_certified(&self, ray: &Ray, solid: u32) -> CertifiedIntervals {
         let o = self.reference_point();
         // `value(o) = n·0 + d = d` exactly; halving `n` is exact.
-        Parts { c: o.coords, a: Matrix3::zeros(), w: self.normal_vector() * 0.5, k: self.value(&o) }.certified(ray, solid)
+        Parts { c: o.coords, a: Matrix3::zeros(), w: self.normal_vector() * 0.5, k: self.value(&o) }
+            .certified(ray, solid)
     }
 }
 
@@ -326,8 +327,7 @@ impl Parts {
             + 2.0 * (abs_b * gamma(1) + abs_lo * gamma(9)).dot(&big_g)
             + delta.dot(&(abs_a * delta)));
 
-        if !(s.is_finite() && t.is_finite() && u.is_finite() && e_s.is_finite() && e_t.is_finite() && e_u.is_finite())
-        {
+        if !(s.is_finite() && t.is_finite() && u.is_finite() && e_s.is_finite() && e_t.is_finite() && e_u.is_finite()) {
             return self.settle(ray, solid);
         }
         if e_s == 0.0 && s == 0.0 {
@@ -382,7 +382,14 @@ impl Parts {
     }
 
     /// The linear case `s = 0` (exactly: `|r|ᵀ|A||r| = 0`): `2tμ + u <= 0`.
-    fn linear(&self, ray: &Ray, solid: u32, (t, e_t): (f64, f64), (u, e_u): (f64, f64), lambda0: f64) -> CertifiedIntervals {
+    fn linear(
+        &self,
+        ray: &Ray,
+        solid: u32,
+        (t, e_t): (f64, f64),
+        (u, e_u): (f64, f64),
+        lambda0: f64,
+    ) -> CertifiedIntervals {
         if t.abs() <= e_t {
             return self.settle(ray, solid);
         }
@@ -435,12 +442,7 @@ impl Parts {
                         whole_ray()
                     }
                 }
-                _ => quadratic_pieces(
-                    sign > 0,
-                    clip(&roots[0], rounded[0].t),
-                    clip(&roots[1], rounded[1].t),
-                    solid,
-                ),
+                _ => quadratic_pieces(sign > 0, clip(&roots[0], rounded[0].t), clip(&roots[1], rounded[1].t), solid),
             },
         };
         CertifiedIntervals::new(set, &rounded, true)

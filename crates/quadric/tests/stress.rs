@@ -41,7 +41,12 @@ fn judge_ray(solid: &Solid, ray: &Ray, verdicts: &mut Verdicts) -> Result<(), St
     verdicts.rays += 1;
     verdicts.crossings += want.len();
     if got.len() != want.len() {
-        return Err(format!("certified: {} crossings, exact {}: {solid:?} {ray:?} {:?}", got.len(), want.len(), certified.set));
+        return Err(format!(
+            "certified: {} crossings, exact {}: {solid:?} {ray:?} {:?}",
+            got.len(),
+            want.len(),
+            certified.set
+        ));
     }
     for (l, &t) in want.iter().zip(&got) {
         let error = certified.error_at(t);
@@ -71,7 +76,11 @@ fn check_rays(solid: &Solid, rays: &[Ray], context: &str) -> Verdicts {
             panic!("{context}: {e}");
         }
     }
-    assert!(v.unexcused_default.is_empty(), "{context}: default mode wrong where the bound is clear: {:?}", v.unexcused_default);
+    assert!(
+        v.unexcused_default.is_empty(),
+        "{context}: default mode wrong where the bound is clear: {:?}",
+        v.unexcused_default
+    );
     v
 }
 
@@ -184,7 +193,9 @@ fn exact_tangencies_and_starts_on_the_surface() {
         let tube = Solid::from(Quadric::tube_y().transformed(&move_to));
         let cone = Solid::from(Quadric::cone().transformed(&move_to));
         let plane = Solid::from(HalfSpace::new(0.0, 1.0, 0.0, 0.0).expect("valid").transformed(&move_to));
-        let at = |x: f64, y: f64, z: f64, dir: Vector3<f64>| Ray::new(Point3::from(c + Vector3::new(x, y, z)), dir).expect("valid");
+        let at = |x: f64, y: f64, z: f64, dir: Vector3<f64>| {
+            Ray::new(Point3::from(c + Vector3::new(x, y, z)), dir).expect("valid")
+        };
         let cases: Vec<(&Solid, Ray, usize)> = vec![
             // Tangent to the sphere and the tube from outside: no crossing.
             (&sphere, at(-5.0, 1.0, 0.0, Vector3::x()), 0),

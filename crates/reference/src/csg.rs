@@ -321,11 +321,7 @@ impl ExactPartition {
     /// later one at an exact cut.
     pub fn owner_at(&self, lambda: f64) -> Option<usize> {
         let x = End::Crossing { root: Root::of_f64(lambda), solid: 0 };
-        self.segments
-            .iter()
-            .rev()
-            .find(|s| s.start.cmp_exact(&x) != Ordering::Greater)
-            .and_then(|s| s.owner)
+        self.segments.iter().rev().find(|s| s.start.cmp_exact(&x) != Ordering::Greater).and_then(|s| s.owner)
     }
 
     /// Ownership errors of a computed partition, given as `(start, end,
@@ -334,9 +330,7 @@ impl ExactPartition {
     /// ones, computed for the exact ones) differs. Disagreements confined to
     /// within `tolerance` of a cut are not counted.
     pub fn ownership_errors(&self, computed: &[(f64, f64, Option<usize>)], tolerance: f64) -> usize {
-        let computed_at = |t: f64| {
-            computed.iter().find(|(a, b, _)| *a <= t && t <= *b).and_then(|s| s.2)
-        };
+        let computed_at = |t: f64| computed.iter().find(|(a, b, _)| *a <= t && t <= *b).and_then(|s| s.2);
         let mid = |a: f64, b: f64| if b.is_finite() { 0.5 * (a + b) } else { a + 1.0 + a.abs() };
         let mut errors = 0;
         for &(a, b, owner) in computed {

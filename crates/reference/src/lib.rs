@@ -19,7 +19,9 @@
 #![deny(missing_docs)]
 
 pub mod csg;
-pub use csg::{block_set, intersect, solid_set, End as ExactEnd, ExactBlock, ExactPartition, ExactSegment, ExactSet, Root};
+pub use csg::{
+    block_set, intersect, solid_set, End as ExactEnd, ExactBlock, ExactPartition, ExactSegment, ExactSet, Root,
+};
 
 use num_bigint::{BigInt, Sign};
 use quadric::{HalfSpace, IntervalSet, Quadric, Ray, Solid, NO_SOLID};

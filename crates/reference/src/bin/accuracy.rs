@@ -55,8 +55,12 @@ enum Mode {
     Textbook,
 }
 
-const MODES: [Mode; 4] =
-    [Mode::Kernel(Precision::Fast), Mode::Kernel(Precision::Accurate), Mode::Kernel(Precision::Certified), Mode::Textbook];
+const MODES: [Mode; 4] = [
+    Mode::Kernel(Precision::Fast),
+    Mode::Kernel(Precision::Accurate),
+    Mode::Kernel(Precision::Certified),
+    Mode::Textbook,
+];
 
 impl Mode {
     fn name(self) -> &'static str {
@@ -251,8 +255,10 @@ fn scene_files(root: &Path) -> Vec<PathBuf> {
     let mut files = Vec::new();
     for dir in [root.join("scenes"), root.join("scenes/bench")] {
         if let Ok(rd) = std::fs::read_dir(&dir) {
-            let mut v: Vec<PathBuf> =
-                rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|x| x == "json")).collect();
+            let mut v: Vec<PathBuf> = rd
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == "json"))
+                .collect();
             v.sort();
             files.extend(v);
         }
@@ -320,7 +326,8 @@ impl Stress {
         let blocks: Vec<_> = blocks.into_iter().map(|(s, o, k)| (moved(&s, &m), o, k)).collect();
         let exact = blocks.iter().map(|(s, o, k)| (s.iter().map(ExactQuadric::solid).collect(), *o, *k)).collect();
         let built = blocks.into_iter().map(|(s, o, k)| Block::new("b", s, o, MaterialKey(k)).expect("a valid block"));
-        let complex = Complex::new(built.collect(), ComplexOptions { epsilon: Some(epsilon) }).expect("a valid complex");
+        let complex =
+            Complex::new(built.collect(), ComplexOptions { epsilon: Some(epsilon) }).expect("a valid complex");
         let (h, probe) = (1e-12 * at.max(1.0), 1e-14 * at.max(1.0));
         Stress { complex, exact, centre, size, camera: Vector3::new(0.3, 0.5, 6.0), h, probe }
     }
@@ -600,10 +607,18 @@ fn main() {
         .map_or_else(|| root.join("docs/accuracy-time-error.png"), PathBuf::from);
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("model name")).map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
+        })
         .unwrap_or_else(|| "unknown".into());
-    let load = std::fs::read_to_string("/proc/loadavg").ok().and_then(|l| l.split_whitespace().next().map(String::from));
-    println!("`cargo run --release -p reference --features bench --bin accuracy{}`", if quick { " -- --quick" } else { "" });
+    let load =
+        std::fs::read_to_string("/proc/loadavg").ok().and_then(|l| l.split_whitespace().next().map(String::from));
+    println!(
+        "`cargo run --release -p reference --features bench --bin accuracy{}`",
+        if quick { " -- --quick" } else { "" }
+    );
     println!();
     println!(
         "machine: {cpu}, load average {} at start; seed {SEED:#x}; reference: exact dyadic decisions, roots to {} bits",
@@ -662,8 +677,7 @@ fn main() {
         let (um, ux) = median_max(&e.tally.ulps);
         let (sm, sx) = median_max(&e.tally.size_units);
         let (lm, lx) = median_max(&e.tally.lambda_rel);
-        let clear: (usize, usize, usize) =
-            e.bins[1..].iter().fold((0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
+        let clear: (usize, usize, usize) = e.bins[1..].iter().fold((0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
         let render = match m {
             Mode::Kernel(_) => {
                 let (r, t) = renders.iter().fold((0u64, 0.0f64), |a, (_, b)| (a.0 + b[k].0, a.1 + b[k].1));
@@ -705,7 +719,10 @@ fn main() {
         println!("| {} | {} |", m.name(), cells.join(" | "));
     }
     println!();
-    println!("### Render throughput per scene (single thread, {} rays/s in millions, best of rounds)", if quick { "80×60" } else { "320×240" });
+    println!(
+        "### Render throughput per scene (single thread, {} rays/s in millions, best of rounds)",
+        if quick { "80×60" } else { "320×240" }
+    );
     println!();
     println!("| scene | Fast | Accurate | Certified | Accurate / Fast time |");
     println!("|---|---|---|---|---|");
