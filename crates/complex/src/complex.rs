@@ -77,6 +77,10 @@ pub struct Complex {
     any_transparent: bool,
 }
 
+/// How many bounded partitions [`Complex::first_interface`] forms, each
+/// reaching one interval end further, before it forms the full one.
+const BOUNDED_TRIES: usize = 3;
+
 /// Per-thread buffers `partition_into` reuses, so that after the first ray
 /// on a thread it allocates only if `out` must grow.
 #[derive(Default)]
@@ -647,8 +651,9 @@ impl Complex {
     /// formed only from the blocks whose boxes the ray enters by the first
     /// interval end `T` after ε (the BVH walk stops there): its events up to
     /// `T` are those of the full partition, since every block with an
-    /// interval reaching into `[0, T]` is among them. Only if none of those
-    /// events qualifies is the full partition formed. `out` is scratch: it
+    /// interval reaching into `[0, T]` is among them. If none of those
+    /// events qualifies, the next try reaches to the next interval end
+    /// after `T`; after a few tries the full partition is formed. `out` is scratch: it
     /// is left holding a prefix of the partition. Allocates only as
     /// [`Complex::partition_into`] does.
     pub fn first_interface(&self, ray: &Ray, out: &mut Partition) -> Option<Event> {
@@ -657,12 +662,20 @@ impl Complex {
         SCRATCH.with(|s| match s.try_borrow_mut() {
             Ok(mut s) => {
                 let Scratch { sets, cuts } = &mut *s;
-                let until = self.collect_sets_to_first_end(ray, sets);
-                self.partition_of_sets(ray, sets, cuts, until, out);
-                found(out).or_else(|| {
-                    self.partition_core(ray, sets, cuts, out);
-                    found(out)
-                })
+                let mut after = eps;
+                for _ in 0..BOUNDED_TRIES {
+                    let until = self.collect_sets_to_first_end(ray, after, sets);
+                    self.partition_of_sets(ray, sets, cuts, until, out);
+                    // Events are formed only up to `until`, where they are
+                    // exact. With `until = ∞` nothing was cut off.
+                    let e = found(out);
+                    if e.is_some() || until == f64::INFINITY {
+                        return e;
+                    }
+                    after = until;
+                }
+                self.partition_core(ray, sets, cuts, out);
+                found(out)
             }
             Err(_) => {
                 self.partition_core(ray, &mut Vec::new(), &mut Vec::new(), out);
@@ -672,18 +685,17 @@ impl Complex {
     }
 
     /// Like [`Complex::collect_sets`] with no bound, but the walk stops at
-    /// the first interval end after ε among the blocks visited, which it
-    /// returns (`∞` if there is none): every block with an interval end in
-    /// `(ε, T]` or an interval holding `(ε, T]` is collected (its padded box
-    /// is entered by `T`), possibly with some farther ones.
-    fn collect_sets_to_first_end(&self, ray: &Ray, out: &mut Vec<(BlockId, IntervalSet)>) -> f64 {
+    /// the first interval end `T` after `after` among the blocks visited,
+    /// which it returns (`∞` if there is none): every block with an
+    /// interval meeting `[0, T]` is collected (its padded box is entered by
+    /// `T`), possibly with some farther ones.
+    fn collect_sets_to_first_end(&self, ray: &Ray, after: f64, out: &mut Vec<(BlockId, IntervalSet)>) -> f64 {
         out.clear();
-        let eps = self.epsilon;
         let mut push = |i: u32, spans: &Spans, t_max: &mut f64| {
             let set = self.without_epsilon(spans.set());
             for iv in set.iter() {
                 for e in [iv.enter.t, iv.exit.t] {
-                    if e > eps && e < *t_max {
+                    if e > after && e < *t_max {
                         *t_max = e;
                     }
                 }
