@@ -444,11 +444,11 @@ impl Complex {
         };
         let mut t_hi = t;
         self.bvh.traverse(rb, t, &mut t_hi, |k, _, _| {
-            let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
+            let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, rb));
             consider(i, &sp)
         });
         for i in self.unbounded_crossed(rb, t, t) {
-            consider(i, &self.block_spans(i, ray, &rb));
+            consider(i, &self.block_spans(i, ray, rb));
         }
         [opaque, transparent].into_iter().find(|&i| i != u32::MAX).map(BlockId)
     }
@@ -468,10 +468,10 @@ impl Complex {
         };
         let mut t_max = max_t;
         for i in self.unbounded_crossed(rb, tau, max_t) {
-            consider(i, &self.block_spans(i, ray, &rb), &mut t_max);
+            consider(i, &self.block_spans(i, ray, rb), &mut t_max);
         }
         self.bvh.traverse(rb, tau, &mut t_max, |k, _, t_max| {
-            let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
+            let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, rb));
             consider(i, &sp, t_max)
         });
         best
@@ -589,11 +589,11 @@ impl Complex {
             };
             let mut t_hi = run_end;
             self.bvh.traverse(rb, self.epsilon, &mut t_hi, |k, _, _| {
-                let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
+                let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, rb));
                 extend(i, &sp)
             });
             for i in self.unbounded_crossed(rb, self.epsilon, run_end) {
-                extend(i, &self.block_spans(i, ray, &rb));
+                extend(i, &self.block_spans(i, ray, rb));
             }
             if next > run_end {
                 if next > max_t {
