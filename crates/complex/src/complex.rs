@@ -77,6 +77,10 @@ pub struct Complex {
     any_transparent: bool,
 }
 
+/// How many bounded partitions [`Complex::first_interface`] forms, each
+/// reaching one interval end further, before it forms the full one.
+const BOUNDED_TRIES: usize = 3;
+
 /// Per-thread buffers `partition_into` reuses, so that after the first ray
 /// on a thread it allocates only if `out` must grow.
 #[derive(Default)]
@@ -640,6 +644,79 @@ impl Complex {
         });
     }
 
+    /// The first event of [`Complex::partition`] after ε where the medium
+    /// changes (`t > ε` and not [`Event::same_medium`]): exactly
+    /// `partition(ray).events.iter().find(|e| e.t > ε && !e.same_medium)`,
+    /// what a renderer stops at or refracts through. The partition is first
+    /// formed only from the blocks whose boxes the ray enters by the first
+    /// interval end `T` after ε (the BVH walk stops there): its events up to
+    /// `T` are those of the full partition, since every block with an
+    /// interval reaching into `[0, T]` is among them. If none of those
+    /// events qualifies, the next try reaches to the next interval end
+    /// after `T`; after a few tries the full partition is formed. `out` is scratch: it
+    /// is left holding a prefix of the partition. Allocates only as
+    /// [`Complex::partition_into`] does.
+    pub fn first_interface(&self, ray: &Ray, out: &mut Partition) -> Option<Event> {
+        let eps = self.epsilon;
+        let found = |out: &Partition| out.events.iter().find(|e| e.t > eps && !e.same_medium).copied();
+        SCRATCH.with(|s| match s.try_borrow_mut() {
+            Ok(mut s) => {
+                let Scratch { sets, cuts } = &mut *s;
+                let mut after = eps;
+                for _ in 0..BOUNDED_TRIES {
+                    let until = self.collect_sets_to_first_end(ray, after, sets);
+                    self.partition_of_sets(ray, sets, cuts, until, out);
+                    // Events are formed only up to `until`, where they are
+                    // exact. With `until = ∞` nothing was cut off.
+                    let e = found(out);
+                    if e.is_some() || until == f64::INFINITY {
+                        return e;
+                    }
+                    after = until;
+                }
+                self.partition_core(ray, sets, cuts, out);
+                found(out)
+            }
+            Err(_) => {
+                self.partition_core(ray, &mut Vec::new(), &mut Vec::new(), out);
+                found(out)
+            }
+        })
+    }
+
+    /// Like [`Complex::collect_sets`] with no bound, but the walk stops at
+    /// the first interval end `T` after `after` among the blocks visited,
+    /// which it returns (`∞` if there is none): every block with an
+    /// interval meeting `[0, T]` is collected (its padded box is entered by
+    /// `T`), possibly with some farther ones.
+    fn collect_sets_to_first_end(&self, ray: &Ray, after: f64, out: &mut Vec<(BlockId, IntervalSet)>) -> f64 {
+        out.clear();
+        let mut push = |i: u32, spans: &Spans, t_max: &mut f64| {
+            let set = self.without_epsilon(spans.set());
+            for iv in set.iter() {
+                for e in [iv.enter.t, iv.exit.t] {
+                    if e > after && e < *t_max {
+                        *t_max = e;
+                    }
+                }
+            }
+            if !set.is_empty() {
+                out.push((BlockId(i), set));
+            }
+        };
+        let rb = RayBoxes::new(ray);
+        let mut t_max = f64::INFINITY;
+        for i in self.unbounded_crossed(&rb, 0.0, f64::INFINITY) {
+            push(i, &self.block_spans(i, ray, &rb), &mut t_max);
+        }
+        self.bvh.traverse(&rb, 0.0, &mut t_max, |k, _, t_max| {
+            let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
+            push(i, &sp, t_max)
+        });
+        out.sort_unstable_by_key(|(id, _)| *id);
+        t_max
+    }
+
     /// The partition, with caller-provided buffers for the sets and cuts.
     fn partition_core(
         &self,
@@ -648,8 +725,21 @@ impl Complex {
         cuts: &mut Vec<f64>,
         out: &mut Partition,
     ) {
-        out.clear();
         self.collect_sets(ray, f64::INFINITY, sets);
+        self.partition_of_sets(ray, sets, cuts, f64::INFINITY, out);
+    }
+
+    /// The partition formed from `sets` (sorted by block id), its events
+    /// only up to `until` (the segments up to the first one past it).
+    fn partition_of_sets(
+        &self,
+        ray: &Ray,
+        sets: &[(BlockId, IntervalSet)],
+        cuts: &mut Vec<f64>,
+        until: f64,
+        out: &mut Partition,
+    ) {
+        out.clear();
         cuts.clear();
         cuts.push(0.0);
         for (_, s) in sets.iter() {
@@ -659,6 +749,11 @@ impl Complex {
         }
         cuts.sort_unstable_by(f64::total_cmp);
         cuts.dedup();
+        // Past `until` only the first cut is needed: it ends the segment
+        // after an event at `until`.
+        if let Some(k) = cuts.iter().position(|&c| c > until) {
+            cuts.truncate(k + 1);
+        }
         cuts.push(f64::INFINITY);
         for w in cuts.windows(2) {
             let (a, b) = (w[0], w[1]);
@@ -678,6 +773,9 @@ impl Complex {
         for w in out.segments.windows(2) {
             let (s0, s1) = (w[0], w[1]);
             let t = s1.start;
+            if t > until {
+                break;
+            }
             // Prefer the entry of the new owner; else the exit of the old one.
             let entry = s1.owner.and_then(|id| {
                 set_of(id)?

@@ -184,6 +184,21 @@ proptest! {
                 prop_assert_eq!(c.cast_ray(ray, h.t).map(|x| x.t), Some(h.t));
             }
 
+            // first_interface is the first change after ε that is not
+            // between two transparent blocks of one material, and it is the
+            // partition's event there (surface, normal and all).
+            let one_medium = |b: Option<BlockId>, a: Option<BlockId>| match (b.map(|i| c.block(i)), a.map(|i| c.block(i))) {
+                (Some(x), Some(y)) => x.is_transparent() && y.is_transparent() && x.material() == y.material(),
+                _ => false,
+            };
+            let interface = brute.iter().find(|(t, b, a)| *t > eps && !one_medium(*b, *a)).map(|x| x.0);
+            let mut scratch = complex::Partition::default();
+            let fi = c.first_interface(ray, &mut scratch);
+            prop_assert_eq!(fi.map(|e| e.t), interface);
+            if let Some(e) = fi {
+                prop_assert_eq!(Some(&e), p.events.iter().find(|x| x.t == e.t));
+            }
+
             // occluded is "the first visible event is within max_t".
             let mut limits = vec![f64::INFINITY, 0.5, 3.0, eps];
             if let Some(t) = first {

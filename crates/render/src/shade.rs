@@ -134,8 +134,9 @@ impl<'w> Shader<'w> {
                 after,
             });
         }
-        self.complex.partition_into(ray, &mut scratch.partition);
-        scratch.partition.events.iter().find(|e| e.t > self.eps && !e.same_medium).map(|e| Event {
+        // The partition only as far as its first interface (`t > ε`, not
+        // between two blocks of one medium), where this ray stops.
+        self.complex.first_interface(ray, &mut scratch.partition).map(|e| Event {
             t: e.t,
             point: e.point,
             normal: e.normal,
