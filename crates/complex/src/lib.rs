@@ -24,4 +24,4 @@ pub use complex::{Complex, ComplexOptions, Hit, DEFAULT_RELATIVE_EPSILON};
 pub use error::ComplexError;
 pub use partition::{Event, Partition, Segment, Surface};
 pub use quadric::Precision;
-pub use spawn::{spawn_origin, MARGIN as SPAWN_MARGIN};
+pub use spawn::{spawn_origin, Spawner, MARGIN as SPAWN_MARGIN};

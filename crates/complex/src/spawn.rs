@@ -100,39 +100,116 @@ impl Complex {
 /// the last candidate if no doubling satisfies the check (only for points
 /// far from the surface or near overflow).
 pub fn spawn_origin(solid: &Solid, point: &Point3<f64>, direction: &Vector3<f64>) -> Point3<f64> {
-    let eval = |x: &Point3<f64>| match solid {
+    match Prepared::at(solid, point) {
+        Some(p) => match p.side(direction) {
+            Some(sigma) => p.offset(solid, point, sigma),
+            None => *point,
+        },
+        None => *point,
+    }
+}
+
+/// What [`spawn_origin`] needs of the point itself, whatever the direction:
+/// the unit normal and the first-order offset to either side.
+#[derive(Clone, Copy, Debug)]
+struct Prepared {
+    f: f64,
+    err: f64,
+    g: f64,
+    n: Vector3<f64>,
+    rounding: f64,
+}
+
+impl Prepared {
+    /// `None` where the normal is undefined (a zero gradient, a cone's apex).
+    fn at(solid: &Solid, point: &Point3<f64>) -> Option<Prepared> {
+        let Bounded { f, err, gradient } = eval(solid, point);
+        let n = quadric::normal::unit(gradient)?;
+        // Rounding `o'` to doubles moves it by up to `u|o'ᵢ|` per
+        // coordinate, i.e. `u Σ|o'ᵢ n̂ᵢ|` along the normal (the floor set by
+        // the world coordinates; pbrt's `dot(|n|, pError)`).
+        let rounding = 2.0 * U * point.coords.abs().dot(&n.abs());
+        Some(Prepared { f, err, g: gradient.norm(), n, rounding })
+    }
+
+    /// `±1`, the side `direction` leaves on; `None` when tangent (no side is
+    /// left) or not finite.
+    fn side(&self, direction: &Vector3<f64>) -> Option<f64> {
+        let side = self.n.dot(direction);
+        (side != 0.0 && side.is_finite()).then(|| side.signum())
+    }
+
+    /// The origin on side `sigma`.
+    fn offset(&self, solid: &Solid, point: &Point3<f64>, sigma: f64) -> Point3<f64> {
+        let Prepared { f, err, g, n, rounding } = *self;
+        // Along the normal line `x(β) = p̂ + βn̂`, `f(x(β)) = f(p̂) + β|∇f| + β²n̂ᵀAn̂`:
+        // to first order the sign we want is reached at `β = (σf + M·err)/|∇f|`
+        // past the surface. The rounding of `o'` and the error bound of the
+        // evaluation at `o'` enter the start value twice over, so the first
+        // candidate nearly always passes. (At least the smallest normal
+        // double: a point exactly on a plane through the world origin has no
+        // error to bound.)
+        let mut delta = (((-sigma * f).max(0.0) + 2.0 * MARGIN * err) / g + 2.0 * rounding).max(f64::MIN_POSITIVE);
+        let mut origin = *point;
+        for _ in 0..TRIES {
+            origin = point + n * (sigma * delta);
+            let at = eval(solid, &origin);
+            if sigma * at.f > MARGIN * at.err {
+                return origin;
+            }
+            delta *= 2.0;
+        }
+        origin
+    }
+}
+
+/// Spawns every secondary ray of one hit point: the point's own work (the
+/// error-bounded `f` and the normal) is done once, and each side's origin
+/// the first time a ray leaves on that side — a hit with three lights and a
+/// reflection computes one origin, not four. Each ray is exactly
+/// [`Complex::spawn_ray`]'s. From [`Complex::spawner`].
+#[derive(Debug)]
+pub struct Spawner<'c> {
+    solid: Option<&'c Solid>,
+    point: Point3<f64>,
+    prepared: Option<Option<Prepared>>,
+    /// The origins for `σ = -1` and `σ = +1`.
+    origins: [Option<Point3<f64>>; 2],
+}
+
+impl Spawner<'_> {
+    /// The ray from the hit point along `direction` (as
+    /// [`Complex::spawn_ray`]).
+    pub fn ray(&mut self, direction: &Vector3<f64>) -> Result<Ray, GeometryError> {
+        let Some(solid) = self.solid else { return Ray::new(self.point, *direction) };
+        let point = self.point;
+        let prepared = *self.prepared.get_or_insert_with(|| Prepared::at(solid, &point));
+        let origin = match prepared.and_then(|p| p.side(direction).map(|sigma| (p, sigma))) {
+            None => point,
+            Some((p, sigma)) => {
+                *self.origins[usize::from(sigma > 0.0)].get_or_insert_with(|| p.offset(solid, &point, sigma))
+            }
+        };
+        Ray::new(origin, *direction)
+    }
+}
+
+impl Complex {
+    /// A [`Spawner`] for the hit `point` on `surface`: many secondary rays
+    /// from one point, each equal to [`Complex::spawn_ray`]'s.
+    pub fn spawner(&self, surface: Surface, point: &Point3<f64>) -> Spawner<'_> {
+        let solid = self.blocks().get(surface.block.index()).and_then(|b| b.solids().get(surface.solid as usize));
+        let finite = point.iter().all(|c| c.is_finite());
+        Spawner { solid: solid.filter(|_| finite), point: *point, prepared: None, origins: [None; 2] }
+    }
+}
+
+/// `f` of either kind of solid at `x`, with its error bound and gradient.
+fn eval(solid: &Solid, x: &Point3<f64>) -> Bounded {
+    match solid {
         Solid::Quadric(q) => quadric_value(q, x),
         Solid::HalfSpace(h) => half_space_value(h, x),
-    };
-    let Bounded { f, err, gradient } = eval(point);
-    let Some(n) = quadric::normal::unit(gradient) else { return *point };
-    let side = n.dot(direction);
-    if side == 0.0 || !side.is_finite() {
-        return *point;
     }
-    let sigma = side.signum();
-    let g = gradient.norm();
-    // Along the normal line `x(β) = p̂ + βn̂`, `f(x(β)) = f(p̂) + β|∇f| + β²n̂ᵀAn̂`:
-    // to first order the sign we want is reached at `β = (σf + M·err)/|∇f|`
-    // past the surface. Rounding `o'` to doubles moves it by up to
-    // `u|o'ᵢ|` per coordinate, i.e. `u Σ|o'ᵢ n̂ᵢ|` along the normal (the
-    // floor set by the world coordinates; pbrt's `dot(|n|, pError)`), and
-    // the evaluation at `o'` has an error bound of its own: both enter the
-    // start value twice over, so the first candidate nearly always passes.
-    let rounding = 2.0 * U * point.coords.abs().dot(&n.abs());
-    // (At least the smallest normal double: a point exactly on a plane
-    // through the world origin has no error to bound.)
-    let mut delta = (((-sigma * f).max(0.0) + 2.0 * MARGIN * err) / g + 2.0 * rounding).max(f64::MIN_POSITIVE);
-    let mut origin = *point;
-    for _ in 0..TRIES {
-        origin = point + n * (sigma * delta);
-        let at = eval(&origin);
-        if sigma * at.f > MARGIN * at.err {
-            return origin;
-        }
-        delta *= 2.0;
-    }
-    origin
 }
 
 /// `f(x)` with a bound of its rounding error and the gradient `∇f(x)`.

@@ -6,7 +6,7 @@
 //! hit comes from [`Complex::cast_ray`] and shadow rays stop at the first
 //! blocker; the partition is only formed when some block is transparent.
 
-use complex::{BlockId, Complex, Partition};
+use complex::{BlockId, Complex, Partition, Spawner};
 use quadric::nalgebra::{Point3, Vector3};
 use quadric::normal::facing;
 use quadric::Ray;
@@ -172,6 +172,9 @@ impl<'w> Shader<'w> {
         let ambient = Vector3::from(world.settings.ambient);
         let mut c = weigh(&mat.ambient, &ambient);
 
+        // Every secondary ray of this point leaves from one of two origins.
+        let mut spawner = self.complex.spawner(complex::Surface { block: e.block, solid: e.solid }, &e.point);
+
         let wants_diffuse = !is_zero(&mat.diffuse);
         let wants_specular = !is_zero(&mat.specular);
         if wants_diffuse || wants_specular {
@@ -186,7 +189,7 @@ impl<'w> Shader<'w> {
                 if nl <= 0.0 {
                     continue;
                 }
-                let pass = self.transmittance(e, &l, dist, scratch);
+                let pass = self.transmittance(&mut spawner, &l, dist, scratch);
                 if is_zero(&pass) {
                     continue;
                 }
@@ -227,7 +230,7 @@ impl<'w> Shader<'w> {
                 } else {
                     let dir = -eta * v + (eta * cos_i - (1.0 - sin2_t).sqrt()) * n;
                     let w = weight * mat.transmit.max();
-                    if let (true, Ok(r)) = (w >= MIN_PATH_WEIGHT, self.spawn(e, &dir)) {
+                    if let (true, Ok(r)) = (w >= MIN_PATH_WEIGHT, spawner.ray(&dir)) {
                         c += weigh(&mat.transmit, &self.trace_weighted(&r, depth + 1, w, scratch));
                     }
                 }
@@ -236,30 +239,24 @@ impl<'w> Shader<'w> {
         let w = weight * kr.max();
         if !is_zero(&kr) && w >= MIN_PATH_WEIGHT {
             let dir = 2.0 * cos_i * n - v;
-            if let Ok(r) = self.spawn(e, &dir) {
+            if let Ok(r) = spawner.ray(&dir) {
                 c += weigh(&kr, &self.trace_weighted(&r, depth + 1, w, scratch));
             }
         }
         c
     }
 
-    /// A secondary ray from the event's point along `dir`, its origin moved
-    /// off the surface to the side `dir` leaves on by a checked error bound
-    /// ([`Complex::spawn_ray`]): no acne however far the surface is.
-    fn spawn(&self, e: &Event, dir: &Vector3<f64>) -> Result<Ray, quadric::GeometryError> {
-        self.complex.spawn_ray(complex::Surface { block: e.block, solid: e.solid }, &e.point, dir)
-    }
-
     /// How much light passes from the event's point towards a light `dist`
-    /// away along `l`: zero if an opaque block is in the way, else the
+    /// away along `l` (the shadow ray from `spawner`, [`Complex::spawn_ray`]'s
+    /// origin: no acne however far the surface is): zero if an opaque block is in the way, else the
     /// product of the `transmit` of each transparent medium crossed (once
     /// per passage).
-    fn transmittance(&self, e: &Event, l: &Vector3<f64>, dist: f64, scratch: &mut Scratch) -> Rgb {
+    fn transmittance(&self, spawner: &mut Spawner, l: &Vector3<f64>, dist: f64, scratch: &mut Scratch) -> Rgb {
         let one = Vector3::repeat(1.0);
         if !self.world.settings.shadows {
             return one;
         }
-        let Ok(ray) = self.spawn(e, l) else { return one };
+        let Ok(ray) = spawner.ray(l) else { return one };
         scratch.rays += 1;
         if !self.transparent {
             // Any blocker will do: an any-hit query, no nearest-hit ordering.
