@@ -260,12 +260,12 @@ impl Solid {
 impl Quadric {
     /// The hit point of `ray` at the computed crossing `lambda`, to within
     /// about the rounding floor of the true hit point (`docs/quadric.md` §9):
-    /// `p + λr` formed in local coordinates around the centre (`p - c` kept
-    /// exactly as a TwoSum pair), then one Newton step along the ray onto
-    /// the surface, taken only if it lowers `|f|`. `λ` itself is a double and
-    /// carries up to `ulp(λ)` of error, which, times `|r| = 1`, exceeds the
-    /// hit point's own ulps when the ray starts farther from the origin than
-    /// the hit; the step removes it. For a `lambda` that is no crossing the
+    /// `p + λr`, then Newton steps along the ray onto the surface, each in
+    /// world coordinates with `f` evaluated around the centre in
+    /// double-double, each taken only if it lowers `|f|`. `λ` itself is a
+    /// double and carries up to `ulp(λ)` of error, which, times `|r| = 1`,
+    /// exceeds the hit point's own ulps when the ray starts farther from the
+    /// origin than the hit; the steps remove it. For a `lambda` that is no crossing the
     /// result is still a point of the ray near `ray.at(lambda)`.
     #[inline]
     pub fn hit_point(&self, ray: &Ray, lambda: f64) -> Point3<f64> {
@@ -289,7 +289,7 @@ impl Quadric {
 
 impl HalfSpace {
     /// [`Quadric::hit_point`] for the plane: `p + λr` around the reference
-    /// point, moved along the ray onto the plane by one Newton step.
+    /// point, moved along the ray onto the plane by Newton steps.
     #[inline]
     pub fn hit_point(&self, ray: &Ray, lambda: f64) -> Point3<f64> {
         let o = self.reference_point();
@@ -317,6 +317,9 @@ impl Solid {
         }
     }
 }
+
+/// The most Newton steps of [`refine`]: one suffices away from tangency.
+const NEWTON_STEPS: usize = 4;
 
 /// A sum in double-double (TwoSum/TwoProduct, Ogita–Rump–Oishi `Dot2`):
 /// relative error about `u` of the result plus `u²` of the terms' magnitude.
@@ -351,10 +354,13 @@ impl Compensated {
     }
 }
 
-/// `p + λr` as `c + y`, `y` formed in local coordinates and moved along the
-/// ray by one Newton step `-f(y) / (∇f(y)·r)` when that lowers `|f|`
-/// (`f_grad` gives `f` and its gradient at a local point). Non-finite input
-/// gives `ray.at(lambda)`.
+/// `p + λr` moved along the ray onto the surface by Newton steps
+/// `-f(x) / (∇f(x)·r)` while they lower `|f|`. Each step is taken in world
+/// coordinates (so the point ends within rounding of its own ulps, however
+/// its coordinates compare with the centre's), with `f` evaluated around
+/// the centre `c`: `x - c` exactly as a TwoSum pair `d + lo`, `f(d)` in
+/// double-double by `f_grad` (which also gives `∇f(d)`), plus `∇f(d)·lo`.
+/// Non-finite input gives `ray.at(lambda)`.
 #[inline(always)]
 fn refine(
     ray: &Ray,
@@ -362,31 +368,38 @@ fn refine(
     c: &Vector3<f64>,
     f_grad: impl Fn(&Vector3<f64>) -> (f64, Vector3<f64>),
 ) -> Point3<f64> {
-    let (p, r) = (ray.origin().coords, ray.direction());
-    let d = p - c;
-    let lo = Vector3::new(
-        two_sum_error(p.x, -c.x, d.x),
-        two_sum_error(p.y, -c.y, d.y),
-        two_sum_error(p.z, -c.z, d.z),
-    );
-    let mut y = Vector3::new(
-        lambda.mul_add(r.x, d.x) + lo.x,
-        lambda.mul_add(r.y, d.y) + lo.y,
-        lambda.mul_add(r.z, d.z) + lo.z,
-    );
-    let (f, grad) = f_grad(&y);
-    let step = -f / grad.dot(&r);
-    if step.is_finite() && step != 0.0 {
-        let moved = y + r * step;
-        if f_grad(&moved).0.abs() < f.abs() {
-            y = moved;
+    let r = ray.direction();
+    let eval = |x: &Vector3<f64>| {
+        let d = x - c;
+        let lo = Vector3::new(
+            two_sum_error(x.x, -c.x, d.x),
+            two_sum_error(x.y, -c.y, d.y),
+            two_sum_error(x.z, -c.z, d.z),
+        );
+        let (f, grad) = f_grad(&d);
+        (f + grad.dot(&lo), grad)
+    };
+    let start = ray.at(lambda);
+    let mut x = start.coords;
+    // Near a tangency the first step can undershoot (the quadratic term),
+    // so a few steps while |f| keeps falling.
+    let (mut f, mut grad) = eval(&x);
+    for _ in 0..NEWTON_STEPS {
+        let step = -f / grad.dot(&r);
+        if !step.is_finite() || step == 0.0 {
+            break;
         }
+        let moved = x + r * step;
+        let (f_moved, grad_moved) = eval(&moved);
+        if !(f_moved.abs() < f.abs()) {
+            break;
+        }
+        (x, f, grad) = (moved, f_moved, grad_moved);
     }
-    let x = Point3::from(c + y);
     if x.iter().all(|v| v.is_finite()) {
-        x
+        Point3::from(x)
     } else {
-        ray.at(lambda)
+        start
     }
 }
 
