@@ -371,11 +371,8 @@ fn refine(
     let r = ray.direction();
     let eval = |x: &Vector3<f64>| {
         let d = x - c;
-        let lo = Vector3::new(
-            two_sum_error(x.x, -c.x, d.x),
-            two_sum_error(x.y, -c.y, d.y),
-            two_sum_error(x.z, -c.z, d.z),
-        );
+        let lo =
+            Vector3::new(two_sum_error(x.x, -c.x, d.x), two_sum_error(x.y, -c.y, d.y), two_sum_error(x.z, -c.z, d.z));
         let (f, grad) = f_grad(&d);
         (f + grad.dot(&lo), grad)
     };
