@@ -284,8 +284,8 @@ fn settle_ties(
                 }
                 let t = match theirs.compare_roots(m, &solids[i], k, ray) {
                     Some(Ordering::Equal) => other.t,
-                    Some(Ordering::Less) if end.t <= other.t => other.t.next_up(),
-                    Some(Ordering::Greater) if end.t >= other.t => other.t.next_down(),
+                    Some(Ordering::Less) if end.t <= other.t => adjacent(other.t, true),
+                    Some(Ordering::Greater) if end.t >= other.t => adjacent(other.t, false),
                     _ => continue,
                 };
                 moved |= t != end.t;
@@ -297,6 +297,17 @@ fn settle_ties(
         return own.set;
     }
     IntervalSet::from_intervals(out[..n].iter().copied()).unwrap_or(own.set)
+}
+
+/// The next double above (`up`) or below finite `x` (`f64::next_up` needs
+/// a newer Rust than the MSRV).
+fn adjacent(x: f64, up: bool) -> f64 {
+    if x == 0.0 {
+        let tiny = f64::from_bits(1);
+        return if up { tiny } else { -tiny };
+    }
+    let bits = x.to_bits();
+    f64::from_bits(if (x > 0.0) == up { bits + 1 } else { bits - 1 })
 }
 
 /// A solid of a block, wherever it is stored.

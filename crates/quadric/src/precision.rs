@@ -388,7 +388,7 @@ fn refine(
         }
         let moved = x + r * step;
         let (f_moved, grad_moved) = eval(&moved);
-        if !(f_moved.abs() < f.abs()) {
+        if f_moved.abs().partial_cmp(&f.abs()) != Some(core::cmp::Ordering::Less) {
             break;
         }
         (x, f, grad) = (moved, f_moved, grad_moved);
