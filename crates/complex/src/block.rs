@@ -273,7 +273,7 @@ fn settle_ties(
                 let Some(j) = other.solid() else { continue };
                 // Certified bounds are at most 2⁻²⁰ relative (else settled
                 // exactly, one ulp): a cheap filter before the other's bound.
-                if !near(end.t, other.t, e_own + 1e-6 * other.t.abs()) {
+                if !near(end.t, other.t, e_own + 4e-6 * other.t.abs()) {
                     continue;
                 }
                 let Some(theirs) = solids.get(j as usize) else { continue };
@@ -322,7 +322,8 @@ pub(crate) enum SolidRef<'a> {
 /// the same order as `IntervalSet::intersect` (on equal `t` the earlier
 /// solid's end is kept), so the bounds and their solid tags are those of
 /// [`Block::intervals`]' set path. `None` if a quadric gave more than one
-/// interval after all (then the caller takes the exact general path).
+/// interval after all, or in `Precision::Certified` (then the caller takes
+/// the general path, which settles ties between solids exactly).
 #[inline(always)]
 pub(crate) fn convex_spans<'a>(
     ray: &Ray,
