@@ -191,6 +191,9 @@ impl Block {
 
     /// Intersection of interval sets, for blocks with non-convex solids.
     pub(crate) fn spans_general(&self, ray: &Ray) -> Spans {
+        if self.precision == Precision::Certified {
+            return Spans::Many(self.certified_set(ray));
+        }
         let mut acc = IntervalSet::everything().clip(0.0, f64::INFINITY);
         for (i, s) in self.solids.iter().enumerate() {
             let i = i as u32;
@@ -213,6 +216,100 @@ impl Block {
     }
 }
 
+impl Block {
+    /// [`Precision::Certified`]: the intersection of the solids' certified
+    /// sets, with ties between solids settled exactly. Before solid `i`'s
+    /// set meets the running set, each of its ends that lies within the two
+    /// certified bounds of an end of an earlier solid `j` is ordered against
+    /// it by [`Solid::compare_roots`] (exact): an exact tie takes the earlier
+    /// end's value (so the intersection keeps the earlier solid's end, and
+    /// an interval closing on a tie is empty, as in the exact reference),
+    /// and a strict order the doubles got wrong is restored by one ulp.
+    /// Outside those near-ties (the usual case) it is the float
+    /// intersection.
+    fn certified_set(&self, ray: &Ray) -> IntervalSet {
+        let mut acc = IntervalSet::everything().clip(0.0, f64::INFINITY);
+        for (i, s) in self.solids.iter().enumerate() {
+            let own = s.intervals_certified(ray, i as u32);
+            let set = settle_ties(ray, &self.solids, i, &own, &acc);
+            // Within capacity: checked in `Block::new`.
+            acc = acc.intersect(&set).unwrap_or_default();
+            if acc.is_empty() {
+                break;
+            }
+        }
+        acc
+    }
+}
+
+/// The root of `certified` nearest to `t`, as (index, bound of `t`'s
+/// distance from the true root).
+fn nearest_root(certified: &quadric::CertifiedIntervals, t: f64) -> Option<(usize, f64)> {
+    let (k, r) = certified.roots().iter().enumerate().min_by(|a, b| (a.1.t - t).abs().total_cmp(&(b.1.t - t).abs()))?;
+    Some((k, r.error + (r.t - t).abs()))
+}
+
+/// Solid `i`'s certified set with each end that the bounds cannot order
+/// against an end of `acc` (ends of solids `< i`) moved to its exact place
+/// relative to it (see [`Block::certified_set`]).
+#[cold]
+fn settle_ties(
+    ray: &Ray,
+    solids: &[Solid],
+    i: usize,
+    own: &quadric::CertifiedIntervals,
+    acc: &IntervalSet,
+) -> IntervalSet {
+    use core::cmp::Ordering;
+    let near = |a: f64, b: f64, bound: f64| (a - b).abs() <= bound;
+    let mut out = [Interval::new(Bound::free(0.0), Bound::free(0.0)); IntervalSet::CAPACITY];
+    let n = own.set.len();
+    out[..n].copy_from_slice(own.set.as_slice());
+    let mut moved = false;
+    for iv in out[..n].iter_mut() {
+        for end in [&mut iv.enter, &mut iv.exit] {
+            let Some((k, e_own)) = end.solid().and_then(|_| nearest_root(own, end.t)) else { continue };
+            for other in acc.iter().flat_map(|a| [a.enter, a.exit]) {
+                let Some(j) = other.solid() else { continue };
+                // Certified bounds are at most 2⁻²⁰ relative (else settled
+                // exactly, one ulp): a cheap filter before the other's bound.
+                if !near(end.t, other.t, e_own + 4e-6 * other.t.abs()) {
+                    continue;
+                }
+                let Some(theirs) = solids.get(j as usize) else { continue };
+                let cert = theirs.intervals_certified(ray, j);
+                let Some((m, e_other)) = nearest_root(&cert, other.t) else { continue };
+                if !near(end.t, other.t, e_own + e_other) {
+                    continue;
+                }
+                let t = match theirs.compare_roots(m, &solids[i], k, ray) {
+                    Some(Ordering::Equal) => other.t,
+                    Some(Ordering::Less) if end.t <= other.t => adjacent(other.t, true),
+                    Some(Ordering::Greater) if end.t >= other.t => adjacent(other.t, false),
+                    _ => continue,
+                };
+                moved |= t != end.t;
+                end.t = t;
+            }
+        }
+    }
+    if !moved {
+        return own.set;
+    }
+    IntervalSet::from_intervals(out[..n].iter().copied()).unwrap_or(own.set)
+}
+
+/// The next double above (`up`) or below finite `x` (`f64::next_up` needs
+/// a newer Rust than the MSRV).
+fn adjacent(x: f64, up: bool) -> f64 {
+    if x == 0.0 {
+        let tiny = f64::from_bits(1);
+        return if up { tiny } else { -tiny };
+    }
+    let bits = x.to_bits();
+    f64::from_bits(if (x > 0.0) == up { bits + 1 } else { bits - 1 })
+}
+
 /// A solid of a block, wherever it is stored.
 #[derive(Clone, Copy)]
 pub(crate) enum SolidRef<'a> {
@@ -225,13 +322,18 @@ pub(crate) enum SolidRef<'a> {
 /// the same order as `IntervalSet::intersect` (on equal `t` the earlier
 /// solid's end is kept), so the bounds and their solid tags are those of
 /// [`Block::intervals`]' set path. `None` if a quadric gave more than one
-/// interval after all (then the caller takes the exact general path).
+/// interval after all, or in `Precision::Certified` (then the caller takes
+/// the general path, which settles ties between solids exactly).
 #[inline(always)]
 pub(crate) fn convex_spans<'a>(
     ray: &Ray,
     solids: impl Iterator<Item = SolidRef<'a>>,
     precision: Precision,
 ) -> Option<Spans> {
+    if precision == Precision::Certified {
+        // Ties between solids are settled exactly on the general path.
+        return None;
+    }
     let (mut enter, mut exit) = (Bound::free(0.0), Bound::free(f64::INFINITY));
     for (i, s) in solids.enumerate() {
         let (e, x) = match s {

@@ -30,9 +30,13 @@ pub struct ComplexOptions {
 /// The first surface a ray meets.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
-    /// Distance along the ray.
+    /// Distance along the ray: a double, so it carries up to `ulp(t)` of
+    /// error, which can exceed the ulps of the hit point itself when the ray
+    /// starts farther from the world origin than the hit.
     pub t: f64,
-    /// The hit point.
+    /// The hit point, near `ray.at(t)` but refined onto the surface
+    /// ([`quadric::Solid::hit_point`]: within about the float64 rounding
+    /// floor of the true hit point; `ray.at(t)` in `Precision::Fast`).
     pub point: Point3<f64>,
     /// Outward unit normal of the hit block's surface (zero where undefined).
     pub normal: Vector3<f64>,
@@ -558,11 +562,16 @@ impl Complex {
         let (t, block, solid, slot) = best?;
         // The normal from the packed copy of the solid, which the test just
         // read (the block's own copy is likely out of the caches by now).
-        let point = ray.at(t);
-        let normal = match slot.and_then(|k| self.kernel.solid(k, solid)) {
-            Some(SolidRef::HalfSpace(h)) => h.normal(),
-            Some(SolidRef::Quadric(q)) => q.normal(&point).unwrap_or_else(Vector3::zeros),
-            None => self.normal(BlockId(block), solid, &point),
+        let (point, normal) = match slot.and_then(|k| self.kernel.solid(k, solid)) {
+            Some(SolidRef::HalfSpace(h)) => (self.refined(ray, t, |t| h.hit_point(ray, t)), h.normal()),
+            Some(SolidRef::Quadric(q)) => {
+                let point = self.refined(ray, t, |t| q.hit_point(ray, t));
+                (point, q.normal(&point).unwrap_or_else(Vector3::zeros))
+            }
+            None => {
+                let point = self.hit_point(ray, t, BlockId(block), solid);
+                (point, self.normal(BlockId(block), solid, &point))
+            }
         };
         Some(Hit { t, point, normal, entering: true, block: BlockId(block), solid })
     }
@@ -611,9 +620,28 @@ impl Complex {
     }
 
     fn hit(&self, ray: &Ray, t: f64, block: u32, solid: u32, entering: bool) -> Hit {
-        let point = ray.at(t);
+        let point = self.hit_point(ray, t, BlockId(block), solid);
         let normal = self.normal(BlockId(block), solid, &point);
         Hit { t, point, normal, entering, block: BlockId(block), solid }
+    }
+
+    /// The hit point at the crossing `t` of `solid`'s surface: refined onto
+    /// the surface ([`quadric::Solid::hit_point`]) except in
+    /// [`quadric::Precision::Fast`], where it is `ray.at(t)`.
+    fn hit_point(&self, ray: &Ray, t: f64, block: BlockId, solid: u32) -> Point3<f64> {
+        match self.blocks[block.index()].solids().get(solid as usize) {
+            Some(s) => self.refined(ray, t, |t| s.hit_point(ray, t)),
+            None => ray.at(t),
+        }
+    }
+
+    #[inline(always)]
+    fn refined(&self, ray: &Ray, t: f64, refine: impl FnOnce(f64) -> Point3<f64>) -> Point3<f64> {
+        if self.kernel.precision == quadric::Precision::Fast {
+            ray.at(t)
+        } else {
+            refine(t)
+        }
     }
 
     fn normal(&self, block: BlockId, solid: u32, point: &Point3<f64>) -> Vector3<f64> {
@@ -794,7 +822,7 @@ impl Complex {
                 })
             };
             let Some((block, solid, entering)) = entry.or_else(exit) else { continue };
-            let point = ray.at(t);
+            let point = self.hit_point(ray, t, block, solid);
             let normal = self.normal(block, solid, &point);
             let medium = |o: Option<BlockId>| {
                 o.map(|id| &self.blocks[id.index()]).filter(|b| b.is_transparent()).map(|b| b.material())

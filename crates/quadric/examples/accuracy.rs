@@ -186,7 +186,8 @@ fn measure(shape: &Shape, distance: f64, n: usize, rng: &mut Rng) -> (Row, Scene
         row.floor.add_floor(&scene, ray, &exact);
         row.naive.add(&scene, ray, &exact, &world.naive(ray), &JUDGE);
         row.stable.add(&scene, ray, &exact, &world.stable(ray), &JUDGE);
-        row.ours.add(&scene, ray, &exact, &scene.solid.intervals(ray, 0), &JUDGE);
+        let point = |t| scene.solid.hit_point(ray, t);
+        row.ours.add_with_points(&scene, ray, &exact, &scene.solid.intervals(ray, 0), &JUDGE, point);
     }
     (row, scene, rays)
 }
@@ -282,7 +283,10 @@ fn main() {
         reference::PRECISION
     );
     println!();
-    println!("Errors: distance of the hit point p + λr (in f64) from the true surface, in radii (median / max);");
+    println!(
+        "Errors: exact distance from the true surface of the reported hit point (Komplex's Accurate and Certified: \
+         Solid::hit_point, refined onto the surface; Fast and the textbook formulas: p + λr in f64), in radii (median / max);"
+    );
     println!("FH / FM: rays with more / fewer surface crossings than the exact answer.");
     println!();
 
@@ -389,8 +393,11 @@ fn print_modes() {
                 floor.add_floor(&scene, ray, &exact);
                 for (k, (mode, _)) in MODES.iter().enumerate() {
                     let set = scene.solid.intervals_with(ray, 0, *mode);
-                    scene_modes[k].add(&scene, ray, &exact, &set, &JUDGE);
-                    tallies[k].add(&scene, ray, &exact, &set, &JUDGE);
+                    // The point each mode reports (`complex::Hit::point`):
+                    // refined onto the surface except in Fast.
+                    let point = |t| if *mode == Precision::Fast { ray.at(t) } else { scene.solid.hit_point(ray, t) };
+                    scene_modes[k].add_with_points(&scene, ray, &exact, &set, &JUDGE, point);
+                    tallies[k].add_with_points(&scene, ray, &exact, &set, &JUDGE, point);
                 }
             }
             let (_, fmax) = median_max(&scene_floor.size_units);

@@ -2,7 +2,7 @@
 //! (the default) and [`Precision::Certified`], and the certified roots with
 //! their rigorous error bounds. See `docs/quadric.md`, "Precision modes".
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Point3, Vector3};
 
 use super::{from, linear_set, quadratic_set, up_to, whole_ray, Quadric};
 use crate::exact::{Exact, ExactRoot};
@@ -254,6 +254,149 @@ impl Solid {
     /// root. Settles ties between the ends of different solids.
     pub fn compare_roots(&self, i: usize, other: &Solid, j: usize, ray: &Ray) -> Option<core::cmp::Ordering> {
         Some(exact_roots(self, ray)?.get(i)?.cmp(exact_roots(other, ray)?.get(j)?))
+    }
+}
+
+impl Quadric {
+    /// The hit point of `ray` at the computed crossing `lambda`, to within
+    /// about the rounding floor of the true hit point (`docs/quadric.md` §9):
+    /// `p + λr`, then Newton steps along the ray onto the surface, each in
+    /// world coordinates with `f` evaluated around the centre in
+    /// double-double, each taken only if it lowers `|f|`. `λ` itself is a
+    /// double and carries up to `ulp(λ)` of error, which, times `|r| = 1`,
+    /// exceeds the hit point's own ulps when the ray starts farther from the
+    /// origin than the hit; the steps remove it. For a `lambda` that is no crossing the
+    /// result is still a point of the ray near `ray.at(lambda)`.
+    #[inline]
+    pub fn hit_point(&self, ray: &Ray, lambda: f64) -> Point3<f64> {
+        refine(ray, lambda, &self.centre, |y| {
+            // f(y) = yᵀAy + 2wᵀy + k in double-double: its plain rounding,
+            // amplified by an anisotropic A (|y|ᵀ|A||y| ≫ |∇f|·|y|), would
+            // move the point by several ulps.
+            let (a, mut f) = (&self.a, Compensated::default());
+            for i in 0..3 {
+                f.add_product(a[(i, i)], y[i], y[i]);
+                f.add_product(2.0 * self.w[i], y[i], 1.0);
+                for j in i + 1..3 {
+                    f.add_product(2.0 * a[(i, j)], y[i], y[j]);
+                }
+            }
+            f.add(self.k);
+            (f.value(), 2.0 * (a * y + self.w))
+        })
+    }
+}
+
+impl HalfSpace {
+    /// [`Quadric::hit_point`] for the plane: `p + λr` around the reference
+    /// point, moved along the ray onto the plane by Newton steps.
+    #[inline]
+    pub fn hit_point(&self, ray: &Ray, lambda: f64) -> Point3<f64> {
+        let o = self.reference_point();
+        // `value(o) = n·0 + d = d` exactly.
+        let (n, d) = (*self.normal_vector(), self.value(&o));
+        refine(ray, lambda, &o.coords, |y| {
+            let mut f = Compensated::default();
+            for i in 0..3 {
+                f.add_product(n[i], y[i], 1.0);
+            }
+            f.add(d);
+            (f.value(), n)
+        })
+    }
+}
+
+impl Solid {
+    /// The hit point of `ray` at the crossing `lambda` of this solid's
+    /// surface, refined onto the surface ([`Quadric::hit_point`]).
+    #[inline]
+    pub fn hit_point(&self, ray: &Ray, lambda: f64) -> Point3<f64> {
+        match self {
+            Solid::Quadric(q) => q.hit_point(ray, lambda),
+            Solid::HalfSpace(h) => h.hit_point(ray, lambda),
+        }
+    }
+}
+
+/// The most Newton steps of [`refine`]: one suffices away from tangency.
+const NEWTON_STEPS: usize = 4;
+
+/// A sum in double-double (TwoSum/TwoProduct, Ogita–Rump–Oishi `Dot2`):
+/// relative error about `u` of the result plus `u²` of the terms' magnitude.
+#[derive(Default)]
+struct Compensated {
+    hi: f64,
+    lo: f64,
+}
+
+impl Compensated {
+    #[inline(always)]
+    fn add(&mut self, x: f64) {
+        let (sum, error) = crate::roots::two_sum(self.hi, x);
+        self.hi = sum;
+        self.lo += error;
+    }
+
+    /// Adds `a·b·c` (`b·c` exactly by TwoProduct, then `a` times each part).
+    #[inline(always)]
+    fn add_product(&mut self, a: f64, b: f64, c: f64) {
+        let bc = b * c;
+        let bc_lo = b.mul_add(c, -bc);
+        let p = a * bc;
+        let p_lo = a.mul_add(bc, -p);
+        self.add(p);
+        self.lo += a.mul_add(bc_lo, p_lo);
+    }
+
+    #[inline(always)]
+    fn value(&self) -> f64 {
+        self.hi + self.lo
+    }
+}
+
+/// `p + λr` moved along the ray onto the surface by Newton steps
+/// `-f(x) / (∇f(x)·r)` while they lower `|f|`. Each step is taken in world
+/// coordinates (so the point ends within rounding of its own ulps, however
+/// its coordinates compare with the centre's), with `f` evaluated around
+/// the centre `c`: `x - c` exactly as a TwoSum pair `d + lo`, `f(d)` in
+/// double-double by `f_grad` (which also gives `∇f(d)`), plus `∇f(d)·lo`.
+/// Non-finite input gives `ray.at(lambda)`.
+#[inline(always)]
+fn refine(
+    ray: &Ray,
+    lambda: f64,
+    c: &Vector3<f64>,
+    f_grad: impl Fn(&Vector3<f64>) -> (f64, Vector3<f64>),
+) -> Point3<f64> {
+    let r = ray.direction();
+    let eval = |x: &Vector3<f64>| {
+        let d = x - c;
+        let lo =
+            Vector3::new(two_sum_error(x.x, -c.x, d.x), two_sum_error(x.y, -c.y, d.y), two_sum_error(x.z, -c.z, d.z));
+        let (f, grad) = f_grad(&d);
+        (f + grad.dot(&lo), grad)
+    };
+    let start = ray.at(lambda);
+    let mut x = start.coords;
+    // Near a tangency the first step can undershoot (the quadratic term),
+    // so a few steps while |f| keeps falling.
+    let (mut f, mut grad) = eval(&x);
+    for _ in 0..NEWTON_STEPS {
+        let step = -f / grad.dot(&r);
+        if !step.is_finite() || step == 0.0 {
+            break;
+        }
+        let moved = x + r * step;
+        let (f_moved, grad_moved) = eval(&moved);
+        if f_moved.abs().partial_cmp(&f.abs()) != Some(core::cmp::Ordering::Less) {
+            break;
+        }
+        (x, f, grad) = (moved, f_moved, grad_moved);
+    }
+    if x.iter().all(|v| v.is_finite()) {
+        Point3::from(x)
+    } else {
+        start
     }
 }
 

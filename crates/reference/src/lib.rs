@@ -754,8 +754,25 @@ impl Tally {
         }
     }
 
-    /// Scores a computed set against the exact one for one ray.
+    /// Scores a computed set against the exact one for one ray, each hit
+    /// point formed as `ray.at(λ̂)` (the textbook point from the double `λ̂`).
     pub fn add(&mut self, scene: &Scene, ray: &Ray, exact: &ExactRay, computed: &IntervalSet, judge: &Judge) {
+        self.add_with_points(scene, ray, exact, computed, judge, |t| ray.at(t));
+    }
+
+    /// [`Tally::add`] with the hit point of the computed crossing `λ̂` given
+    /// by `point` (e.g. the kernel's refined `Solid::hit_point`): the
+    /// hit-point error is the exact distance of `point(λ̂)` from the true
+    /// surface; the relative error of `λ` is that of `λ̂` itself.
+    pub fn add_with_points(
+        &mut self,
+        scene: &Scene,
+        ray: &Ray,
+        exact: &ExactRay,
+        computed: &IntervalSet,
+        judge: &Judge,
+        point: impl Fn(f64) -> Point3<f64>,
+    ) {
         let want = exact.crossings();
         let got = computed_crossings(computed);
         if want.len() != got.len() {
@@ -782,7 +799,7 @@ impl Tally {
         }
         for (l, &lh) in want.into_iter().zip(&got) {
             let exact_point = ExactQuadric::rounded_point(ray, l);
-            let x = ray.at(lh);
+            let x = point(lh);
             if let Some(dist) = scene.exact.distance_f64([x.x, x.y, x.z]) {
                 self.size_units.push(dist / scene.size);
                 self.ulps.push(dist / scene.ulp_at(exact_point));

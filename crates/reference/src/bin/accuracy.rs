@@ -220,7 +220,12 @@ fn measure_errors(sets: &[StressSet]) -> (Vec<ModeErrors>, Tally) {
             let want = exact.crossings().len();
             for (m, e) in MODES.iter().zip(out.iter_mut()) {
                 let got = solve(*m, &set.scene, &set.textbook, ray);
-                e.tally.add(&set.scene, ray, &exact, &got, &judge);
+                // The point each row reports: `Solid::hit_point` (refined
+                // onto the surface, as `complex::Hit::point`) for Accurate
+                // and Certified; `p + λr` for Fast and the textbook formula.
+                let refined = matches!(m, Mode::Kernel(Precision::Accurate | Precision::Certified));
+                let point = |t| if refined { set.scene.solid.hit_point(ray, t) } else { ray.at(t) };
+                e.tally.add_with_points(&set.scene, ray, &exact, &got, &judge, point);
                 let n = computed_crossings(&got).len();
                 let b = &mut e.bins[bin];
                 b.0 += 1;
