@@ -44,6 +44,9 @@ enum Command {
         /// Worker threads [default: one per core].
         #[arg(long, value_name = "N")]
         threads: Option<usize>,
+        /// Precision mode of the kernel (docs/accuracy.md).
+        #[arg(long, value_enum, default_value_t = PrecisionArg::Accurate)]
+        precision: PrecisionArg,
         /// Anti-aliasing: an N×N grid of rays per pixel (overrides settings.samples).
         #[arg(long, value_name = "N")]
         samples: Option<u32>,
@@ -98,6 +101,9 @@ enum Command {
         /// Worker threads [default: one per core].
         #[arg(long, value_name = "N")]
         threads: Option<usize>,
+        /// Precision mode of the kernel (docs/accuracy.md).
+        #[arg(long, value_enum, default_value_t = PrecisionArg::Accurate)]
+        precision: PrecisionArg,
     },
     /// Write a benchmark scene (JSON).
     Generate {
@@ -128,6 +134,27 @@ impl SizeArgs {
             .resized(self.width, self.height)
             .map_err(|e| Error::Options(format!("--width/--height: {e}")))?;
         Ok(())
+    }
+}
+
+/// `--precision`: the kernel's precision modes (`quadric::Precision`).
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum PrecisionArg {
+    /// World-space roots: the cheapest, inaccurate far from the origin.
+    Fast,
+    /// Re-based, compensated roots and hit points refined onto the surface (the default).
+    Accurate,
+    /// Rigorous root bounds, ambiguous cases settled exactly (several times slower).
+    Certified,
+}
+
+impl From<PrecisionArg> for render::Precision {
+    fn from(p: PrecisionArg) -> Self {
+        match p {
+            PrecisionArg::Fast => render::Precision::Fast,
+            PrecisionArg::Accurate => render::Precision::Accurate,
+            PrecisionArg::Certified => render::Precision::Certified,
+        }
     }
 }
 
@@ -171,7 +198,7 @@ fn triple(v: &[f64]) -> [f64; 3] {
 
 fn run(command: Command) -> Result<(), Error> {
     match command {
-        Command::Render { scene, output, png, size, threads, samples, half, exposure } => {
+        Command::Render { scene, output, png, size, threads, precision, samples, half, exposure } => {
             let cancel = interrupt_flag();
             if !exposure.is_finite() {
                 return Err(Error::Options(format!("--exposure must be a finite number of stops, got {exposure}")));
@@ -184,6 +211,7 @@ fn run(command: Command) -> Result<(), Error> {
                 world.settings.samples = n;
             }
             size.apply(&mut world)?;
+            world.complex.set_precision(precision.into());
             let output = output.unwrap_or_else(|| default_output(&scene));
             // Fail before the render, not after it, if an output cannot be written.
             render::check_writable(&output)?;
@@ -249,13 +277,13 @@ fn run(command: Command) -> Result<(), Error> {
             print!("{}", render::schema_json());
             Ok(())
         }
-        Command::Bench { scenes, size, threads } => {
+        Command::Bench { scenes, size, threads, precision } => {
             println!(
                 "{:<28} {:>8} {:>9} {:>9} {:>9} {:>12} {:>12} {:>14} {:>14}",
                 "scene", "blocks", "load s", "size", "render s", "primary", "all rays", "primary/s", "all rays/s"
             );
             for scene in scenes {
-                let m = render::bench::measure(&scene, (size.width, size.height), threads)?;
+                let m = render::bench::measure(&scene, (size.width, size.height), threads, precision.into())?;
                 println!(
                     "{:<28} {:>8} {:>9.3} {:>9} {:>9.3} {:>12} {:>12} {:>14.0} {:>14.0}",
                     scene.file_stem().map_or_else(|| scene.display().to_string(), |s| s.to_string_lossy().into()),

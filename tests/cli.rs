@@ -1,6 +1,6 @@
 //! Command-line behaviour: commands, defaults, the schema.
 
-use crate::support::{all_scenes, komplex, komplex_ok, root, scene, tempdir, text, write_scene};
+use crate::support::{all_scenes, komplex, komplex_ok, read_exr, root, scene, tempdir, text, write_scene};
 
 #[test]
 fn schema_prints_the_committed_schema() {
@@ -115,4 +115,31 @@ fn complete_examples_in_the_format_docs_load() {
         let o = komplex(dir.path(), &["render", p.to_str().unwrap(), "--width", "16", "--height", "12"]);
         assert!(o.status.success(), "example {i} of docs/scene-format.md:\n{json}\n{}", text(&o));
     }
+}
+
+#[test]
+fn every_precision_mode_renders_the_same_blocks() {
+    let dir = tempdir();
+    let s = scene("csg.json");
+    let mut ids = Vec::new();
+    for mode in ["fast", "accurate", "certified"] {
+        let out = format!("{mode}.exr");
+        komplex_ok(
+            dir.path(),
+            &["render", s.to_str().unwrap(), "-o", &out, "--precision", mode, "--width", "32", "--height", "24"],
+        );
+        let Some(exr) = read_exr(&dir.path().join(&out)) else { return };
+        ids.push(exr.channels["id.block"].samples.clone());
+    }
+    // Near the origin the modes agree on which block each pixel sees, but
+    // for a silhouette pixel or two.
+    for other in [&ids[0], &ids[2]] {
+        let differ = other.iter().zip(&ids[1]).filter(|(a, b)| a != b).count();
+        assert!(differ * 100 <= ids[1].len(), "{differ} of {} pixels see another block", ids[1].len());
+    }
+    // An unknown mode is a usage error that lists the modes.
+    let o = komplex(dir.path(), &["render", s.to_str().unwrap(), "--precision", "exact"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("fast") && err.contains("accurate") && err.contains("certified"), "{err}");
 }

@@ -387,6 +387,11 @@ fn refine(
             break;
         }
         let moved = x + r * step;
+        // A step below the point's rounding leaves it where it is (and |f|
+        // as it is): converged, without another evaluation.
+        if moved == x {
+            break;
+        }
         let (f_moved, grad_moved) = eval(&moved);
         if f_moved.abs().partial_cmp(&f.abs()) != Some(core::cmp::Ordering::Less) {
             break;

@@ -12,7 +12,7 @@
 //! std::fs::write(&path, r#"{ "camera": { "eye": [0, 0, 5], "direction": [0, 0, -1] },
 //!                            "lights": [ { "position": [2, 2, 5] } ],
 //!                            "blocks": [ { "objects": [ { "sphere": {} } ] } ] }"#).unwrap();
-//! let m = render::bench::measure(&path, (Some(8), Some(6)), Some(1)).unwrap();
+//! let m = render::bench::measure(&path, (Some(8), Some(6)), Some(1), render::Precision::default()).unwrap();
 //! assert_eq!((m.blocks, m.primary), (1, 48));
 //! assert!(m.rays > m.primary); // shadow rays from the pixels that see the ball
 //! ```
@@ -55,12 +55,18 @@ impl Measurement {
 
 /// Loads `path`, renders it once at `size` (`(width, height)` overrides as
 /// in [`Camera::resized`](crate::camera::Camera::resized); default: the
-/// scene's) with `threads` workers and one ray per pixel, and reports the
-/// times.
-pub fn measure(path: &Path, size: (Option<u32>, Option<u32>), threads: Option<usize>) -> Result<Measurement, Error> {
+/// scene's) with `threads` workers, one ray per pixel and the kernel in
+/// `precision` mode, and reports the times.
+pub fn measure(
+    path: &Path,
+    size: (Option<u32>, Option<u32>),
+    threads: Option<usize>,
+    precision: crate::Precision,
+) -> Result<Measurement, Error> {
     let start = Instant::now();
     let mut world = crate::load(path)?;
     let load = start.elapsed();
+    world.complex.set_precision(precision);
     world.camera =
         world.camera.resized(size.0, size.1).map_err(|e| Error::Options(format!("--width/--height: {e}")))?;
     world.settings.samples = 1;

@@ -37,6 +37,7 @@ pub mod trace;
 
 use std::path::Path;
 
+pub use complex::Precision;
 pub use error::{nearest, Error, SceneError};
 pub use output::check_writable;
 
