@@ -296,7 +296,21 @@ fn settle_ties(
     if !moved {
         return own.set;
     }
-    IntervalSet::from_intervals(out[..n].iter().copied()).unwrap_or(own.set)
+    rebuilt(&out[..n], own.set)
+}
+
+/// The set of `intervals` (in any order; empty ones dropped, touching ones
+/// merged), or `fallback` past capacity. Unlike
+/// `IntervalSet::from_intervals` it does not allocate: a union per interval.
+fn rebuilt(intervals: &[Interval], fallback: IntervalSet) -> IntervalSet {
+    let mut acc = IntervalSet::empty();
+    for iv in intervals {
+        match acc.union(&IntervalSet::from_interval(iv.enter, iv.exit)) {
+            Ok(set) => acc = set,
+            Err(_) => return fallback,
+        }
+    }
+    acc
 }
 
 /// A relative distance within which two ends may be a tie their certified
@@ -367,9 +381,9 @@ pub(crate) fn settle_block_ties(ray: &Ray, blocks: &[Block], sets: &mut [(crate:
             }
         }
         if moved {
-            // Moved ends keep their order within the block but for ulps:
-            // rebuilt (an interval closed by the move is dropped).
-            *set = IntervalSet::from_intervals(out[..n].iter().copied()).unwrap_or(*set);
+            // Moved by ulps: rebuilt (an interval closed by the move is
+            // dropped, two that now touch are merged).
+            *set = rebuilt(&out[..n], *set);
             moved_any = true;
         }
     }
