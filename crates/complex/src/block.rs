@@ -296,7 +296,98 @@ fn settle_ties(
     if !moved {
         return own.set;
     }
-    IntervalSet::from_intervals(out[..n].iter().copied()).unwrap_or(own.set)
+    rebuilt(&out[..n], own.set)
+}
+
+/// The set of `intervals` (in any order; empty ones dropped, touching ones
+/// merged), or `fallback` past capacity. Unlike
+/// `IntervalSet::from_intervals` it does not allocate: a union per interval.
+fn rebuilt(intervals: &[Interval], fallback: IntervalSet) -> IntervalSet {
+    let mut acc = IntervalSet::empty();
+    for iv in intervals {
+        match acc.union(&IntervalSet::from_interval(iv.enter, iv.exit)) {
+            Ok(set) => acc = set,
+            Err(_) => return fallback,
+        }
+    }
+    acc
+}
+
+/// A relative distance within which two ends may be a tie their certified
+/// bounds cannot order: each bound is at most 2⁻²⁰ of its root (else the
+/// root was settled exactly, to an ulp), so two ends farther apart than
+/// this (relative to the larger) are ordered by their doubles.
+pub(crate) const NEAR_TIE: f64 = 4e-6;
+
+/// [`Precision::Certified`] ties between the ends of *different blocks*
+/// in the partition (SPEC §3), settled as [`Block::certified_set`] settles
+/// those between solids: each end of a later block's set (in `sets`,
+/// sorted by block id = priority) that lies within the two certified
+/// bounds of an end of an earlier block is ordered against it by
+/// [`Solid::compare_roots`] (exact). An exact tie takes the earlier
+/// block's double, so the partition has one cut there and the priority
+/// rule picks the owner (as `reference::csg::ExactPartition`); a strict
+/// order the doubles got wrong is restored by one ulp. Returns whether an
+/// end moved. A cold path: the caller enters it only when two ends lie
+/// within [`NEAR_TIE`] of each other.
+#[cold]
+pub(crate) fn settle_block_ties(ray: &Ray, blocks: &[Block], sets: &mut [(crate::BlockId, IntervalSet)]) -> bool {
+    use core::cmp::Ordering;
+    let near = |a: f64, b: f64, bound: f64| (a - b).abs() <= bound;
+    // The solid an end lies on and the index and bound of its root.
+    let root_of = |block: &Block, end: &Bound| -> Option<(Solid, usize, f64)> {
+        let s = end.solid()?;
+        let solid = *block.solids().get(s as usize)?;
+        let (k, e) = nearest_root(&solid.intervals_certified(ray, s), end.t)?;
+        Some((solid, k, e))
+    };
+    let mut moved_any = false;
+    for later in 1..sets.len() {
+        let (earlier, rest) = sets.split_at_mut(later);
+        let (id, set) = &mut rest[0];
+        let Some(block) = blocks.get(id.index()) else { continue };
+        let mut out = [Interval::new(Bound::free(0.0), Bound::free(0.0)); IntervalSet::CAPACITY];
+        let n = set.len();
+        out[..n].copy_from_slice(set.as_slice());
+        let mut moved = false;
+        for iv in out[..n].iter_mut() {
+            for end in [&mut iv.enter, &mut iv.exit] {
+                // Found only when a near end is met (the root is recomputed).
+                let mut own = None;
+                for (other_id, other_set) in earlier.iter() {
+                    let Some(other_block) = blocks.get(other_id.index()) else { continue };
+                    for other in other_set.iter().flat_map(|a| [a.enter, a.exit]) {
+                        if other.solid().is_none() || !near(end.t, other.t, NEAR_TIE * end.t.abs().max(other.t.abs())) {
+                            continue;
+                        }
+                        if own.is_none() {
+                            own = root_of(block, end);
+                        }
+                        let Some((mine, k, e_own)) = own else { continue };
+                        let Some((theirs, m, e_other)) = root_of(other_block, &other) else { continue };
+                        if !near(end.t, other.t, e_own + e_other) {
+                            continue;
+                        }
+                        let t = match theirs.compare_roots(m, &mine, k, ray) {
+                            Some(Ordering::Equal) => other.t,
+                            Some(Ordering::Less) if end.t <= other.t => adjacent(other.t, true),
+                            Some(Ordering::Greater) if end.t >= other.t => adjacent(other.t, false),
+                            _ => continue,
+                        };
+                        moved |= t != end.t;
+                        end.t = t;
+                    }
+                }
+            }
+        }
+        if moved {
+            // Moved by ulps: rebuilt (an interval closed by the move is
+            // dropped, two that now touch are merged).
+            *set = rebuilt(&out[..n], *set);
+            moved_any = true;
+        }
+    }
+    moved_any
 }
 
 /// The next double above (`up`) or below finite `x` (`f64::next_up` needs

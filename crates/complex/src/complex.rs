@@ -762,20 +762,31 @@ impl Complex {
     fn partition_of_sets(
         &self,
         ray: &Ray,
-        sets: &[(BlockId, IntervalSet)],
+        sets: &mut [(BlockId, IntervalSet)],
         cuts: &mut Vec<f64>,
         until: f64,
         out: &mut Partition,
     ) {
         out.clear();
-        cuts.clear();
-        cuts.push(0.0);
-        for (_, s) in sets.iter() {
-            for iv in s.iter() {
-                cuts.extend([iv.enter.t, iv.exit.t].into_iter().filter(|t| *t > 0.0 && t.is_finite()));
+        let gather = |sets: &[(BlockId, IntervalSet)], cuts: &mut Vec<f64>| {
+            cuts.clear();
+            cuts.push(0.0);
+            for (_, s) in sets.iter() {
+                for iv in s.iter() {
+                    cuts.extend([iv.enter.t, iv.exit.t].into_iter().filter(|t| *t > 0.0 && t.is_finite()));
+                }
             }
+            cuts.sort_unstable_by(f64::total_cmp);
+        };
+        gather(sets, cuts);
+        // Certified: ends of different blocks that their bounds cannot order
+        // are ordered exactly (a cold path, only when two ends are close).
+        if self.kernel.precision == quadric::Precision::Certified
+            && cuts.windows(2).any(|w| w[1] - w[0] <= crate::block::NEAR_TIE * w[1].abs())
+            && crate::block::settle_block_ties(ray, &self.blocks, sets)
+        {
+            gather(sets, cuts);
         }
-        cuts.sort_unstable_by(f64::total_cmp);
         cuts.dedup();
         // Past `until` only the first cut is needed: it ends the segment
         // after an event at `until`.
