@@ -260,7 +260,6 @@ fn settle_ties(
     own: &quadric::CertifiedIntervals,
     acc: &IntervalSet,
 ) -> IntervalSet {
-    use core::cmp::Ordering;
     let near = |a: f64, b: f64, bound: f64| (a - b).abs() <= bound;
     let mut out = [Interval::new(Bound::free(0.0), Bound::free(0.0)); IntervalSet::CAPACITY];
     let n = own.set.len();
@@ -282,12 +281,7 @@ fn settle_ties(
                 if !near(end.t, other.t, e_own + e_other) {
                     continue;
                 }
-                let t = match theirs.compare_roots(m, &solids[i], k, ray) {
-                    Some(Ordering::Equal) => other.t,
-                    Some(Ordering::Less) if end.t <= other.t => adjacent(other.t, true),
-                    Some(Ordering::Greater) if end.t >= other.t => adjacent(other.t, false),
-                    _ => continue,
-                };
+                let Some(t) = settled(end.t, other.t, theirs.compare_roots(m, &solids[i], k, ray)) else { continue };
                 moved |= t != end.t;
                 end.t = t;
             }
@@ -332,7 +326,6 @@ pub(crate) const NEAR_TIE: f64 = 4e-6;
 /// within [`NEAR_TIE`] of each other.
 #[cold]
 pub(crate) fn settle_block_ties(ray: &Ray, blocks: &[Block], sets: &mut [(crate::BlockId, IntervalSet)]) -> bool {
-    use core::cmp::Ordering;
     let near = |a: f64, b: f64, bound: f64| (a - b).abs() <= bound;
     // The solid an end lies on and the index and bound of its root.
     let root_of = |block: &Block, end: &Bound| -> Option<(Solid, usize, f64)> {
@@ -368,11 +361,8 @@ pub(crate) fn settle_block_ties(ray: &Ray, blocks: &[Block], sets: &mut [(crate:
                         if !near(end.t, other.t, e_own + e_other) {
                             continue;
                         }
-                        let t = match theirs.compare_roots(m, &mine, k, ray) {
-                            Some(Ordering::Equal) => other.t,
-                            Some(Ordering::Less) if end.t <= other.t => adjacent(other.t, true),
-                            Some(Ordering::Greater) if end.t >= other.t => adjacent(other.t, false),
-                            _ => continue,
+                        let Some(t) = settled(end.t, other.t, theirs.compare_roots(m, &mine, k, ray)) else {
+                            continue;
                         };
                         moved |= t != end.t;
                         end.t = t;
@@ -447,4 +437,18 @@ pub(crate) fn convex_spans<'a>(
         }
     }
     Some(Spans::One(Interval::new(enter, exit)))
+}
+
+/// Where an end at `end` goes once it is ordered exactly against another
+/// solid's end at `other` (`order`: the other root against this one): onto
+/// `other` on an exact tie, one ulp to the right side of it where the doubles
+/// got a strict order wrong; `None` where the doubles already agree or the
+/// comparison could not be made.
+fn settled(end: f64, other: f64, order: Option<core::cmp::Ordering>) -> Option<f64> {
+    match order {
+        Some(core::cmp::Ordering::Equal) => Some(other),
+        Some(core::cmp::Ordering::Less) if end <= other => Some(adjacent(other, true)),
+        Some(core::cmp::Ordering::Greater) if end >= other => Some(adjacent(other, false)),
+        _ => None,
+    }
 }
