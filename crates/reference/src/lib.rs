@@ -635,6 +635,17 @@ impl Scene {
         ulp_of_point([x[0] - c.x, x[1] - c.y, x[2] - c.z])
     }
 
+    /// How close the line of `ray` comes to tangency: the exact distance of
+    /// its apex `-t/s` from the surface, in [`Scene::local_ulp`]s there
+    /// (infinite for `s = 0`).
+    pub fn apex_gap_ulps(&self, ray: &Ray, exact: &ExactRay) -> f64 {
+        if exact.s.signum() == 0 {
+            return f64::INFINITY;
+        }
+        let apex = point_at(ray, &(-&exact.t).div(&exact.s)).map(|c| c.to_f64());
+        self.exact.tangency_gap(ray, exact) / self.local_ulp(apex)
+    }
+
     /// Whether the line of `ray` crosses the surface (exact).
     fn crosses(&self, ray: &Ray) -> bool {
         !self.exact.solve(ray).crossings().is_empty()
@@ -781,12 +792,7 @@ impl Tally {
             } else {
                 self.false_misses += 1;
             }
-            let gap = if exact.s.signum() == 0 {
-                f64::INFINITY
-            } else {
-                let apex = point_at(ray, &(-&exact.t).div(&exact.s)).map(|c| c.to_f64());
-                scene.exact.tangency_gap(ray, exact) / scene.local_ulp(apex)
-            };
+            let gap = scene.apex_gap_ulps(ray, exact);
             let p = ray.origin();
             let p = [p.x, p.y, p.z];
             let start = scene.exact.distance_f64(p).unwrap_or(0.0) / scene.local_ulp(p);

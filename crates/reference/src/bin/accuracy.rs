@@ -38,9 +38,7 @@ use std::time::Instant;
 use complex::{Block, Complex, ComplexOptions, Hit, MaterialKey, Opacity};
 use quadric::nalgebra::{Point3, Vector3};
 use quadric::{Bound, HalfSpace, IntervalSet, Precision, Quadric, Ray, Solid, Transform};
-use reference::{
-    computed_crossings, median_max, other_shapes, point_at, unit_sphere, ExactQuadric, Judge, Rng, Scene, Tally,
-};
+use reference::{computed_crossings, median_max, other_shapes, unit_sphere, ExactQuadric, Judge, Rng, Scene, Tally};
 
 const SEED: u64 = 0x6163_6375_7261_6379;
 const DISTANCES: [f64; 4] = [1.0, 1e3, 1e6, 1e9];
@@ -197,12 +195,7 @@ fn stress_sets(quick: bool) -> Vec<StressSet> {
 /// coordinates at the apex (or of the start point, if that is closer).
 fn gap_ulps(set: &StressSet, ray: &Ray, exact: &reference::ExactRay) -> f64 {
     let scene = &set.scene;
-    let gap = if exact.s.signum() == 0 {
-        f64::INFINITY
-    } else {
-        let apex = point_at(ray, &(-&exact.t).div(&exact.s)).map(|c| c.to_f64());
-        scene.exact.tangency_gap(ray, exact) / scene.local_ulp(apex)
-    };
+    let gap = scene.apex_gap_ulps(ray, exact);
     let p = ray.origin();
     let p = [p.x, p.y, p.z];
     gap.min(scene.exact.distance_f64(p).map_or(f64::INFINITY, |d| d / scene.local_ulp(p)))
