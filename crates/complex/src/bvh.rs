@@ -1,14 +1,18 @@
 //! A bounding-volume hierarchy over the bounded blocks.
 //!
-//! Built once with the surface-area heuristic over binned centroids; stored
-//! flat, the two children of a node side by side in 128 bytes aligned to a
-//! cache line (so a step reads both child boxes from two adjacent lines);
-//! traversed front to back with a fixed-size stack, so a query never
-//! allocates. (`f32` boxes rounded outwards, two nodes per 64-byte line,
-//! were measured too: the conversions cost as much as the smaller nodes
-//! saved, see `docs/benchmarks.md`.)
+//! Built once with the surface-area heuristic over binned centroids into a
+//! binary tree, then collapsed into a tree of four-wide nodes: a node holds
+//! the boxes of its (up to) four children lane by lane, so one step tests all
+//! four with a few `f64x4` operations (the `wide` crate: AVX where the
+//! target has it, plain arrays elsewhere) and reads 256 bytes from four
+//! adjacent cache lines; half as many levels as the binary tree. Traversed
+//! front to back with a fixed-size stack, so a query never allocates.
+//! (`f32` boxes rounded outwards, and a scalar four-wide tree, were measured
+//! too and did not pay, see `docs/benchmarks.md`.)
 
+use arrayvec::ArrayVec;
 use quadric::Ray;
+use wide::{f64x4, CmpGt, CmpLe, CmpLt};
 
 use crate::Aabb;
 
@@ -17,19 +21,24 @@ use crate::Aabb;
 const LEAF_SIZE: usize = 1;
 /// Number of centroid bins per axis for the SAH.
 const BINS: usize = 16;
-/// Traversal stack depth; the builder makes a leaf before a subtree could
-/// get deeper than this, so the stack cannot overflow.
+/// Depth limit of the binary build; the builder makes a leaf before a
+/// subtree could get deeper than this.
 pub(crate) const MAX_DEPTH: usize = 64;
+/// Traversal stack size: the four-wide tree is at most `MAX_DEPTH / 2` deep
+/// (see [`Bvh::collapse`]), and a step pops one entry and pushes at most
+/// four, so the stack holds at most `3 · depth + 1` entries.
+const STACK: usize = 3 * MAX_DEPTH.div_ceil(2) + 1;
 
-/// A node: its box and either two children or a run of blocks.
+/// A node of the binary build: its box and either two children or a run of
+/// blocks.
 #[derive(Clone, Copy, Debug)]
 struct Node {
     /// Lower corner.
     min: [f64; 3],
     /// Upper corner.
     max: [f64; 3],
-    /// Inner node: index of its pair of children in `Bvh::pairs`.
-    /// Leaf: index of its first entry in `Bvh::items`.
+    /// Inner node: index of its first child in `Binary::nodes` (the second
+    /// follows it). Leaf: index of its first entry in `items`.
     start: u32,
     /// Number of blocks in a leaf; 0 for an inner node.
     count: u32,
@@ -37,39 +46,72 @@ struct Node {
 
 const EMPTY_NODE: Node = Node { min: [f64::INFINITY; 3], max: [f64::NEG_INFINITY; 3], start: 0, count: 0 };
 
-/// Two sibling nodes (112 bytes, padded to 128), aligned to a cache line.
+/// Up to four children: their boxes lane by lane (axis, then child), and
+/// what each child is. An unused lane has the empty box (`min = +∞`,
+/// `max = -∞`), which no slab test enters. 224 bytes, aligned to lines.
 #[derive(Clone, Copy, Debug)]
 #[repr(align(64))]
-struct Pair([Node; 2]);
+struct Node4 {
+    min: [f64x4; 3],
+    max: [f64x4; 3],
+    /// Inner child: its index in `Bvh::nodes`. Leaf: its first position in
+    /// `Bvh::items`.
+    child: [u32; 4],
+    /// Blocks in a leaf child; 0 for an inner child (and an unused lane).
+    count: [u32; 4],
+}
 
-/// The hierarchy: node pairs, and the block indices the leaves point into.
-/// Node `n` is `pairs[n / 2].0[n % 2]`; the root is node 0 (its sibling,
-/// node 1, is an unused empty node).
+/// The hierarchy: four-wide nodes (the root is node 0) and the block
+/// indices the leaves point into.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Bvh {
-    pairs: Vec<Pair>,
+    nodes: Vec<Node4>,
     items: Vec<u32>,
 }
 
-/// A ray prepared for slab tests: origin and reciprocal direction.
+/// A ray prepared for slab tests: the reciprocal direction, and the origin
+/// moved by the pad towards each side of a box, so that a box face costs one
+/// addition and one product.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RayBoxes {
-    origin: [f64; 3],
     inv: [f64; 3],
-    /// How far outside a block's exact box the kernel may put the ends of
-    /// the block's intervals: they are accurate to a few ulps of the ray
-    /// origin's coordinates, which near a box at the origin (a ray leaving
-    /// the plane x = 0 from (0, 4, 12)) is far more than the box's own
-    /// widening. Boxes are grown by this much in the slab test.
-    pad: f64,
+    /// `-o - pad` for the lower faces and `-o + pad` for the upper ones: the
+    /// ray meets the padded face at `b` where `t = (b + shift) / d`.
+    shift_lo: [f64; 3],
+    shift_hi: [f64; 3],
+    /// The same, four lanes each, for the nodes.
+    inv4: [f64x4; 3],
+    shift_lo4: [f64x4; 3],
+    shift_hi4: [f64x4; 3],
 }
 
 impl RayBoxes {
     pub(crate) fn new(ray: &Ray) -> Self {
         let (o, d) = (ray.origin(), ray.direction());
-        // About 450 ulps of the origin, as `WIDEN_ABS` in `bounds.rs`.
+        // How far outside a block's exact box the kernel may put the ends of
+        // the block's intervals: they are accurate to a few ulps of the ray
+        // origin's coordinates, which near a box at the origin (a ray leaving
+        // the plane x = 0 from (0, 4, 12)) is far more than the box's own
+        // widening. Boxes are grown by this much in the slab test: about
+        // 450 ulps of the origin, as `WIDEN_ABS` in `bounds.rs`.
         let pad = 1e-13 * o.coords.amax();
-        RayBoxes { origin: [o.x, o.y, o.z], inv: [1.0 / d.x, 1.0 / d.y, 1.0 / d.z], pad }
+        let (o, d) = ([o.x, o.y, o.z], [d.x, d.y, d.z]);
+        let inv = d.map(|d| 1.0 / d);
+        // `-o ∓ pad` is rounded once, by half an ulp of `o`: less than 1/900
+        // of the pad, so the slabs hold the box grown by nearly all of it,
+        // far beyond the kernel's few ulps. (Folding the product into an
+        // FMA, `b / d + shift / d`, would lose the sign of `b - o` on a
+        // parallel axis, `∞ - ∞`, and with it every cull along that axis.)
+        let shift_lo = o.map(|o| -o - pad);
+        let shift_hi = o.map(|o| -o + pad);
+        RayBoxes {
+            inv,
+            shift_lo,
+            shift_hi,
+            inv4: inv.map(f64x4::splat),
+            shift_lo4: shift_lo.map(f64x4::splat),
+            shift_hi4: shift_hi.map(f64x4::splat),
+        }
     }
 
     /// The entry parameter of the ray into the closed box within
@@ -81,22 +123,11 @@ impl RayBoxes {
     /// slab gives `[-∞, ∞]` from inside, `±[∞, ∞]` (a miss) from outside, and
     /// NaN (`0·∞`) from its boundary plane, which fails both comparisons and
     /// leaves the range open (the closed box holds that point).
+    ///
+    /// [`RayBoxes::enter4`] is the same arithmetic, lane by lane.
     #[inline(always)]
     pub(crate) fn enter(&self, min: &[f64; 3], max: &[f64; 3], t_min: f64, t_max: f64) -> Option<f64> {
-        let (mut t0, mut t1) = (t_min, t_max);
-        for i in 0..3 {
-            let inv = self.inv[i];
-            let a = (min[i] - self.pad - self.origin[i]) * inv;
-            let b = (max[i] + self.pad - self.origin[i]) * inv;
-            let (a, b) = if inv >= 0.0 { (a, b) } else { (b, a) };
-            // NaN (∞ - ∞ on an infinite side, 0·∞) fails both tests and leaves the range open.
-            if a > t0 {
-                t0 = a;
-            }
-            if b < t1 {
-                t1 = b;
-            }
-        }
+        let (t0, t1) = self.clip(min, max, t_min, t_max);
         let slack = 4.0 * f64::EPSILON * t1.abs().max(t0.abs());
         // `t0 = ∞` (a parallel ray outside a slab on its far side) would pass
         // `t0 <= t1 + ∞`: a miss.
@@ -111,12 +142,19 @@ impl RayBoxes {
     /// arithmetic is monotone). `lo > hi` when the line misses the box.
     #[inline(always)]
     pub(crate) fn range(&self, min: &[f64; 3], max: &[f64; 3]) -> (f64, f64) {
-        let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+        self.clip(min, max, f64::NEG_INFINITY, f64::INFINITY)
+    }
+
+    /// `[t_min, t_max]` narrowed by the three slabs of the padded box.
+    #[inline(always)]
+    fn clip(&self, min: &[f64; 3], max: &[f64; 3], t_min: f64, t_max: f64) -> (f64, f64) {
+        let (mut t0, mut t1) = (t_min, t_max);
         for i in 0..3 {
             let inv = self.inv[i];
-            let a = (min[i] - self.pad - self.origin[i]) * inv;
-            let b = (max[i] + self.pad - self.origin[i]) * inv;
+            let a = (min[i] + self.shift_lo[i]) * inv;
+            let b = (max[i] + self.shift_hi[i]) * inv;
             let (a, b) = if inv >= 0.0 { (a, b) } else { (b, a) };
+            // NaN (∞ - ∞ on an infinite side, 0·∞) fails both tests and leaves the range open.
             if a > t0 {
                 t0 = a;
             }
@@ -127,19 +165,30 @@ impl RayBoxes {
         (t0, t1)
     }
 
-    /// [`RayBoxes::enter`] for a node's box.
+    /// [`RayBoxes::enter`] for the four children of a node at once: the
+    /// entries, and a bit per child whose box the ray enters.
     #[inline(always)]
-    fn enter_node(&self, node: &Node, t_min: f64, t_max: f64) -> Option<f64> {
-        self.enter(&node.min, &node.max, t_min, t_max)
+    fn enter4(&self, node: &Node4, t_min: f64, t_max: f64) -> (f64x4, u32) {
+        let (mut t0, mut t1) = (f64x4::splat(t_min), f64x4::splat(t_max));
+        for i in 0..3 {
+            let a = (node.min[i] + self.shift_lo4[i]) * self.inv4[i];
+            let b = (node.max[i] + self.shift_hi4[i]) * self.inv4[i];
+            let (a, b) = if self.inv[i] >= 0.0 { (a, b) } else { (b, a) };
+            // `if a > t0 { t0 = a }` lane by lane: NaN keeps `t0`.
+            t0 = a.cmp_gt(t0).blend(a, t0);
+            t1 = b.cmp_lt(t1).blend(b, t1);
+        }
+        let slack = f64x4::splat(4.0 * f64::EPSILON) * t1.abs().max(t0.abs());
+        let hit = t0.cmp_lt(f64x4::splat(f64::INFINITY)) & t0.cmp_le(t1 + slack);
+        (t0 - slack, hit.move_mask() as u32)
     }
 }
 
 impl Bvh {
     /// Builds the hierarchy over `(index, box)` pairs; every box must be bounded.
     pub(crate) fn build(entries: &[(u32, Aabb)]) -> Self {
-        let mut bvh = Bvh { pairs: Vec::with_capacity(entries.len() / LEAF_SIZE + 1), items: Vec::new() };
         if entries.is_empty() {
-            return bvh;
+            return Bvh::default();
         }
         let mut work: Vec<Entry> = entries
             .iter()
@@ -150,40 +199,58 @@ impl Bvh {
                 centre: [0.5 * (b.min.x + b.max.x), 0.5 * (b.min.y + b.max.y), 0.5 * (b.min.z + b.max.z)],
             })
             .collect();
-        bvh.items.reserve(entries.len());
-        bvh.pairs.push(Pair([EMPTY_NODE; 2]));
-        bvh.build_node(0, &mut work, 0);
+        let mut binary =
+            Binary { nodes: Vec::with_capacity(2 * entries.len()), items: Vec::with_capacity(entries.len()) };
+        binary.nodes.push(EMPTY_NODE);
+        binary.build_node(0, &mut work, 0);
+        let mut bvh = Bvh { nodes: Vec::with_capacity(entries.len() / 2 + 1), items: binary.items };
+        let root = &binary.nodes[0];
+        if root.count > 0 {
+            // A single leaf: one node with one lane.
+            let mut node = Node4::EMPTY;
+            node.set_box(0, &root.min, &root.max);
+            node.child[0] = root.start;
+            node.count[0] = root.count;
+            bvh.nodes.push(node);
+        } else {
+            bvh.collapse(&binary.nodes, 0);
+        }
         bvh
     }
 
-    #[inline(always)]
-    fn node(&self, n: u32) -> &Node {
-        &self.pairs[(n / 2) as usize].0[(n % 2) as usize]
-    }
-
-    fn node_mut(&mut self, n: u32) -> &mut Node {
-        &mut self.pairs[(n / 2) as usize].0[(n % 2) as usize]
-    }
-
-    /// Fills node `n` with `work`.
-    fn build_node(&mut self, n: u32, work: &mut [Entry], depth: usize) {
-        let (min, max) = bounds_of(work);
-        let split = if work.len() <= LEAF_SIZE || depth + 1 >= MAX_DEPTH { None } else { split(work, &min, &max) };
-        let start = match split {
-            None => {
-                let first = self.items.len() as u32;
-                self.items.extend(work.iter().map(|e| e.index));
-                first
-            }
-            Some(_) => self.pairs.len() as u32,
-        };
-        *self.node_mut(n) = Node { min, max, start, count: if split.is_some() { 0 } else { work.len() as u32 } };
-        if let Some(mid) = split {
-            self.pairs.push(Pair([EMPTY_NODE; 2]));
-            let (left, right) = work.split_at_mut(mid);
-            self.build_node(2 * start, left, depth + 1);
-            self.build_node(2 * start + 1, right, depth + 1);
+    /// Appends the four-wide node for the binary inner node `n`, then those
+    /// of its inner descendants; returns its index. Its children are `n`'s
+    /// descendants found by opening the shallowest inner child until there
+    /// are four, or only leaves: so every inner child is at least two binary
+    /// levels below `n`, and the four-wide tree is at most `MAX_DEPTH / 2`
+    /// deep (see `STACK`).
+    fn collapse(&mut self, nodes: &[Node], n: usize) -> u32 {
+        let first = nodes[n].start as usize;
+        // `(node, binary depth below n)`.
+        let mut children = vec![(first, 1), (first + 1, 1)];
+        while children.len() < 4 {
+            let shallowest =
+                (0..children.len()).filter(|&j| nodes[children[j].0].count == 0).min_by_key(|&j| children[j].1);
+            let Some(j) = shallowest else { break };
+            let (c, d) = children.remove(j);
+            let c = nodes[c].start as usize;
+            children.extend([(c, d + 1), (c + 1, d + 1)]);
         }
+        let me = self.nodes.len();
+        self.nodes.push(Node4::EMPTY);
+        let mut node = Node4::EMPTY;
+        for (lane, &(c, _)) in children.iter().enumerate() {
+            let k = &nodes[c];
+            node.set_box(lane, &k.min, &k.max);
+            if k.count > 0 {
+                node.child[lane] = k.start;
+                node.count[lane] = k.count;
+            } else {
+                node.child[lane] = self.collapse(nodes, c);
+            }
+        }
+        self.nodes[me] = node;
+        me as u32
     }
 
     /// The block indices in leaf order (a leaf's blocks are consecutive).
@@ -203,79 +270,126 @@ impl Bvh {
         t_max: &mut f64,
         mut visit: impl FnMut(u32, f64, &mut f64),
     ) {
-        if self.pairs.is_empty() {
+        if self.nodes.is_empty() {
             return;
         }
-        let Some(t) = ray.enter_node(self.node(0), t_min, *t_max) else { return };
-        // Two plain arrays: zeroing them is a short memset, where an array of
-        // `(u32, f64)` pairs was zeroed field by field on every query.
-        let mut stack_node = [0u32; MAX_DEPTH + 1];
-        let mut stack_t = [0.0f64; MAX_DEPTH + 1];
-        stack_t[0] = t;
-        let mut top = 1usize;
-        while top > 0 {
-            top -= 1;
-            let (n, t_enter) = (stack_node[top], stack_t[top]);
+        // Entries are `child | count << 32` (count 0: an inner node) and the
+        // parameter where the ray enters it. An `ArrayVec` is not zeroed: a
+        // zeroed array of this size cost 8 % of a small scene's instructions.
+        let mut stack: ArrayVec<(u64, f64), STACK> = ArrayVec::new();
+        stack.push((0, t_min));
+        while let Some((r, t_enter)) = stack.pop() {
             if t_enter > *t_max {
                 continue;
             }
-            let node = self.node(n);
-            if node.count > 0 {
-                for k in node.start..node.start + node.count {
+            let (child, count) = (r as u32, (r >> 32) as u32);
+            if count > 0 {
+                for k in child..child + count {
                     visit(k, t_enter, t_max);
                 }
                 continue;
             }
-            let pair = &self.pairs[node.start as usize].0;
-            let (l, r) = (2 * node.start, 2 * node.start + 1);
-            let tl = ray.enter_node(&pair[0], t_min, *t_max);
-            let tr = ray.enter_node(&pair[1], t_min, *t_max);
-            // Push the farther child first so the nearer one is popped next.
-            let mut push = |node: u32, t: f64| {
-                stack_node[top] = node;
-                stack_t[top] = t;
-                top += 1;
-            };
-            match (tl, tr) {
-                (Some(a), Some(b)) if a <= b => {
-                    push(r, b);
-                    push(l, a);
+            let node = &self.nodes[child as usize];
+            let (entry, mut hits) = ray.enter4(node, t_min, *t_max);
+            let entry = entry.to_array();
+            // The children entered, nearest first (insertion into at most
+            // four places), pushed farthest first so the nearest pops next.
+            let mut order = [(0.0f64, 0u64); 4];
+            let mut n = 0;
+            while hits != 0 {
+                let lane = hits.trailing_zeros() as usize;
+                hits &= hits - 1;
+                let item = (entry[lane], u64::from(node.child[lane]) | u64::from(node.count[lane]) << 32);
+                let mut j = n;
+                while j > 0 && order[j - 1].0 > item.0 {
+                    order[j] = order[j - 1];
+                    j -= 1;
                 }
-                (Some(a), Some(b)) => {
-                    push(l, a);
-                    push(r, b);
-                }
-                (Some(a), None) => push(l, a),
-                (None, Some(b)) => push(r, b),
-                (None, None) => {}
+                order[j] = item;
+                n += 1;
+            }
+            // Cannot overflow: see `STACK`.
+            for &(t, r) in order[..n].iter().rev() {
+                stack.push((r, t));
             }
         }
     }
 
     /// Visits the blocks whose boxes contain `p`.
     pub(crate) fn visit_point(&self, p: &[f64; 3], mut visit: impl FnMut(u32)) {
-        if self.pairs.is_empty() {
+        if self.nodes.is_empty() {
             return;
         }
-        let mut stack = [0u32; MAX_DEPTH + 1];
-        let mut top = 1usize;
-        while top > 0 {
-            top -= 1;
-            let n = stack[top];
-            let node = self.node(n);
-            if !(0..3).all(|i| node.min[i] <= p[i] && p[i] <= node.max[i]) {
-                continue;
-            }
-            if node.count > 0 {
-                let first = node.start as usize;
-                for &item in &self.items[first..first + node.count as usize] {
-                    visit(item);
+        let mut stack: ArrayVec<u32, STACK> = ArrayVec::new();
+        stack.push(0);
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n as usize];
+            for lane in 0..4 {
+                let inside = (0..3).all(|i| {
+                    let (lo, hi) = (node.min[i].as_array_ref()[lane], node.max[i].as_array_ref()[lane]);
+                    lo <= p[i] && p[i] <= hi
+                });
+                if !inside {
+                    continue;
                 }
-            } else {
-                stack[top] = 2 * node.start;
-                stack[top + 1] = 2 * node.start + 1;
-                top += 2;
+                let (child, count) = (node.child[lane], node.count[lane]);
+                if count > 0 {
+                    for &item in &self.items[child as usize..(child + count) as usize] {
+                        visit(item);
+                    }
+                } else {
+                    stack.push(child);
+                }
             }
+        }
+    }
+}
+
+impl Node4 {
+    const EMPTY: Node4 = Node4 {
+        min: [f64x4::new([f64::INFINITY; 4]); 3],
+        max: [f64x4::new([f64::NEG_INFINITY; 4]); 3],
+        child: [0; 4],
+        count: [0; 4],
+    };
+
+    fn set_box(&mut self, lane: usize, min: &[f64; 3], max: &[f64; 3]) {
+        for i in 0..3 {
+            let (mut lo, mut hi) = (self.min[i].to_array(), self.max[i].to_array());
+            lo[lane] = min[i];
+            hi[lane] = max[i];
+            self.min[i] = f64x4::new(lo);
+            self.max[i] = f64x4::new(hi);
+        }
+    }
+}
+
+/// The binary tree the builder makes (and [`Bvh::collapse`] turns into the
+/// four-wide one): the two children of an inner node are consecutive.
+struct Binary {
+    nodes: Vec<Node>,
+    items: Vec<u32>,
+}
+
+impl Binary {
+    /// Fills node `n` with `work`.
+    fn build_node(&mut self, n: usize, work: &mut [Entry], depth: usize) {
+        let (min, max) = bounds_of(work);
+        let split = if work.len() <= LEAF_SIZE || depth + 1 >= MAX_DEPTH { None } else { split(work, &min, &max) };
+        let start = match split {
+            None => {
+                let first = self.items.len() as u32;
+                self.items.extend(work.iter().map(|e| e.index));
+                first
+            }
+            Some(_) => self.nodes.len() as u32,
+        };
+        self.nodes[n] = Node { min, max, start, count: if split.is_some() { 0 } else { work.len() as u32 } };
+        if let Some(mid) = split {
+            self.nodes.extend([EMPTY_NODE; 2]);
+            let (left, right) = work.split_at_mut(mid);
+            self.build_node(start as usize, left, depth + 1);
+            self.build_node(start as usize + 1, right, depth + 1);
         }
     }
 }
@@ -414,6 +528,7 @@ fn sah_split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<SahSp
 
 #[cfg(test)]
 mod tests {
+    use proptest::prelude::*;
     use quadric::nalgebra::{Point3, Vector3};
 
     use super::*;
@@ -425,8 +540,10 @@ mod tests {
         let (min, max) = ([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]);
         let check = |origin: [f64; 3], dir: [f64; 3], expected: bool| {
             let ray = Ray::new(Point3::from(origin), Vector3::from(dir)).expect("valid");
-            let got = RayBoxes::new(&ray).enter(&min, &max, 0.0, f64::INFINITY);
+            let rb = RayBoxes::new(&ray);
+            let got = rb.enter(&min, &max, 0.0, f64::INFINITY);
             assert_eq!(got.is_some(), expected, "{origin:?} along {dir:?}: {got:?}");
+            assert_eq!(lane0(&rb, &min, &max, 0.0, f64::INFINITY), got, "{origin:?} along {dir:?}: four-wide");
             assert!(got.map_or(true, |t| !t.is_nan()), "{origin:?} along {dir:?}: NaN entry");
         };
         for axis in 0..3 {
@@ -447,6 +564,75 @@ mod tests {
                 origin[axis] = if sign > 0.0 { 3.0 } else { -2.0 };
                 check(origin, dir, false);
             }
+        }
+    }
+
+    /// [`RayBoxes::enter4`] for a node whose lane 0 holds the box (the other
+    /// lanes empty, which must never be entered).
+    fn lane0(rb: &RayBoxes, min: &[f64; 3], max: &[f64; 3], t_min: f64, t_max: f64) -> Option<f64> {
+        let mut node = Node4::EMPTY;
+        node.set_box(0, min, max);
+        let (entry, hits) = rb.enter4(&node, t_min, t_max);
+        assert_eq!(hits & !1, 0, "an empty lane was entered");
+        (hits & 1 == 1).then(|| entry.to_array()[0])
+    }
+
+    fn coord() -> impl Strategy<Value = f64> {
+        prop_oneof![-4.0..4.0f64, Just(0.0), Just(1.0), Just(-1.0)]
+    }
+
+    fn ray() -> impl Strategy<Value = Ray> {
+        ([coord(), coord(), coord()], [coord(), coord(), coord()])
+            .prop_filter_map("zero direction", |(o, d)| Ray::new(Point3::from(o), Vector3::from(d)).ok())
+    }
+
+    fn boxed() -> impl Strategy<Value = ([f64; 3], [f64; 3])> {
+        let size = || prop_oneof![0.0..3.0f64, Just(0.0)];
+        ([coord(), coord(), coord()], [size(), size(), size()])
+            .prop_map(|(lo, size)| (lo, [lo[0] + size[0], lo[1] + size[1], lo[2] + size[2]]))
+    }
+
+    proptest! {
+        /// The four-wide slab test is the scalar one lane by lane, to the bit
+        /// (parallel axes, flat boxes and boxes through the origin included).
+        #[test]
+        fn four_lanes_are_the_scalar_test(ray in ray(), b in boxed(), t_min in 0.0..2.0f64, extra in 0.0..5.0f64) {
+            let rb = RayBoxes::new(&ray);
+            for t_max in [t_min + extra, f64::INFINITY] {
+                let scalar = rb.enter(&b.0, &b.1, t_min, t_max);
+                let lanes = lane0(&rb, &b.0, &b.1, t_min, t_max);
+                prop_assert_eq!(scalar.map(f64::to_bits), lanes.map(f64::to_bits));
+            }
+        }
+
+        /// The collapsed tree visits exactly the blocks whose own boxes the
+        /// ray enters (no early exit), and `visit_point` exactly those whose
+        /// boxes hold the point.
+        #[test]
+        fn tree_visits_what_brute_force_does(boxes in prop::collection::vec(boxed(), 1..60), ray in ray(), p in [coord(), coord(), coord()]) {
+            let entries: Vec<(u32, Aabb)> = boxes
+                .iter()
+                .enumerate()
+                .map(|(i, (lo, hi))| (i as u32, Aabb { min: Point3::from(*lo), max: Point3::from(*hi) }))
+                .collect();
+            let bvh = Bvh::build(&entries);
+            let rb = RayBoxes::new(&ray);
+            let mut seen = Vec::new();
+            let mut t_max = f64::INFINITY;
+            bvh.traverse(&rb, 0.0, &mut t_max, |k, _, _| seen.push(bvh.items()[k as usize]));
+            seen.sort_unstable();
+            let expected: Vec<u32> = (0..boxes.len() as u32)
+                .filter(|&i| rb.enter(&boxes[i as usize].0, &boxes[i as usize].1, 0.0, f64::INFINITY).is_some())
+                .collect();
+            // Inner boxes hold their children, so nothing is culled early;
+            // a leaf is visited once.
+            prop_assert_eq!(seen, expected);
+            let mut inside = Vec::new();
+            bvh.visit_point(&p, |i| inside.push(i));
+            inside.sort_unstable();
+            let holds = |(lo, hi): &([f64; 3], [f64; 3])| (0..3).all(|i| lo[i] <= p[i] && p[i] <= hi[i]);
+            let expected: Vec<u32> = (0..boxes.len() as u32).filter(|&i| holds(&boxes[i as usize])).collect();
+            prop_assert_eq!(inside, expected);
         }
     }
 }
