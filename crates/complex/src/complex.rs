@@ -89,8 +89,78 @@ const BOUNDED_TRIES: usize = 3;
 /// on a thread it allocates only if `out` must grow.
 #[derive(Default)]
 struct Scratch {
-    sets: Vec<(BlockId, IntervalSet)>,
+    sets: Sets,
     cuts: Vec<f64>,
+}
+
+/// The blocks' interval sets along one ray, stored flat: a set is a run of
+/// `intervals`, so collecting a block costs a copy of its few intervals, not
+/// of a whole fixed-capacity `IntervalSet` (several hundred bytes, copied
+/// two or three times on the way into a vector and again by its sort).
+#[derive(Debug, Default)]
+struct Sets {
+    /// `(block, first interval, count)`, sorted by block once collected.
+    blocks: Vec<(BlockId, u32, u32)>,
+    intervals: Vec<Interval>,
+}
+
+impl Sets {
+    fn clear(&mut self) {
+        self.blocks.clear();
+        self.intervals.clear();
+    }
+
+    /// Adds block `id`'s intervals that reach past `eps` (the ε rule: an
+    /// interval inside `[0, ε]` is no hit), if there are any.
+    #[inline]
+    fn push(&mut self, id: BlockId, intervals: &[Interval], eps: f64) -> &[Interval] {
+        let first = self.intervals.len();
+        // Sorted and disjoint: the intervals ending by ε are a prefix.
+        let keep = intervals.iter().position(|iv| iv.exit.t > eps).unwrap_or(intervals.len());
+        self.intervals.extend_from_slice(&intervals[keep..]);
+        let n = self.intervals.len() - first;
+        if n > 0 {
+            self.blocks.push((id, first as u32, n as u32));
+        }
+        &self.intervals[first..]
+    }
+
+    /// Priority order: by block id.
+    fn sort(&mut self) {
+        self.blocks.sort_unstable_by_key(|b| b.0);
+    }
+
+    fn len(&self) -> usize {
+        self.blocks.len()
+    }
+
+    /// The sets in priority order.
+    fn iter(&self) -> impl Iterator<Item = (BlockId, &[Interval])> + '_ {
+        self.blocks.iter().map(|&(id, first, n)| (id, &self.intervals[first as usize..(first + n) as usize]))
+    }
+
+    /// Block `id`'s intervals, if it has any.
+    fn get(&self, id: BlockId) -> Option<&[Interval]> {
+        let k = self.blocks.binary_search_by_key(&id, |b| b.0).ok()?;
+        let (_, first, n) = self.blocks[k];
+        Some(&self.intervals[first as usize..(first + n) as usize])
+    }
+
+    /// As a vector of interval sets (the public form, and the Certified
+    /// tie settlement's).
+    fn to_vec(&self) -> Vec<(BlockId, IntervalSet)> {
+        self.iter()
+            .map(|(id, ivs)| (id, IntervalSet::from_intervals(ivs.iter().copied()).unwrap_or_default()))
+            .collect()
+    }
+
+    /// Replaces the sets by `sets` (sorted by block).
+    fn assign(&mut self, sets: &[(BlockId, IntervalSet)]) {
+        self.clear();
+        for (id, set) in sets {
+            self.push(*id, set.as_slice(), f64::NEG_INFINITY);
+        }
+    }
 }
 
 thread_local! {
@@ -269,20 +339,18 @@ impl Complex {
     /// The interval set of each block the ray meets, with intervals inside
     /// `[0, ε]` removed, in priority order.
     pub fn intervals(&self, ray: &Ray) -> Vec<(BlockId, IntervalSet)> {
-        let mut out = Vec::new();
+        let mut out = Sets::default();
         self.collect_sets(ray, f64::INFINITY, &mut out);
-        out
+        out.to_vec()
     }
 
     /// The non-empty sets (after the ε rule) of the blocks whose boxes the ray
     /// crosses before `max_t`, sorted by block id.
-    fn collect_sets(&self, ray: &Ray, max_t: f64, out: &mut Vec<(BlockId, IntervalSet)>) {
+    fn collect_sets(&self, ray: &Ray, max_t: f64, out: &mut Sets) {
         out.clear();
+        let eps = self.epsilon;
         let mut push = |i: u32, spans: &Spans| {
-            let set = self.without_epsilon(spans.set());
-            if !set.is_empty() {
-                out.push((BlockId(i), set));
-            }
+            out.push(BlockId(i), spans.as_slice(), eps);
         };
         let rb = RayBoxes::new(ray);
         let mut t_max = max_t;
@@ -293,7 +361,7 @@ impl Complex {
         for i in self.unbounded_crossed(&rb, 0.0, max_t) {
             push(i, &self.block_spans(i, ray, &rb));
         }
-        out.sort_unstable_by_key(|(id, _)| *id);
+        out.sort();
     }
 
     /// The unbounded blocks whose boxes the ray crosses within `[t_min, t_max]`.
@@ -302,16 +370,6 @@ impl Complex {
             let b = &self.boxes[i as usize];
             rb.enter(&b.min.coords.into(), &b.max.coords.into(), t_min, t_max).is_some()
         })
-    }
-
-    /// The ε rule (SPEC §3): an interval contained in `[0, ε]` is no hit.
-    #[inline]
-    fn without_epsilon(&self, mut set: IntervalSet) -> IntervalSet {
-        let eps = self.epsilon;
-        if set.as_slice().first().is_some_and(|iv| iv.exit.t <= eps) {
-            set.retain(|iv| iv.exit.t > eps);
-        }
-        set
     }
 
     /// The block that owns `p` under the priority rule, if any: the first
@@ -668,7 +726,7 @@ impl Complex {
                 let Scratch { sets, cuts } = &mut *s;
                 self.partition_core(ray, sets, cuts, out);
             }
-            Err(_) => self.partition_core(ray, &mut Vec::new(), &mut Vec::new(), out),
+            Err(_) => self.partition_core(ray, &mut Sets::default(), &mut Vec::new(), out),
         });
     }
 
@@ -706,7 +764,7 @@ impl Complex {
                 found(out)
             }
             Err(_) => {
-                self.partition_core(ray, &mut Vec::new(), &mut Vec::new(), out);
+                self.partition_core(ray, &mut Sets::default(), &mut Vec::new(), out);
                 found(out)
             }
         })
@@ -717,19 +775,16 @@ impl Complex {
     /// which it returns (`∞` if there is none): every block with an
     /// interval meeting `[0, T]` is collected (its padded box is entered by
     /// `T`), possibly with some farther ones.
-    fn collect_sets_to_first_end(&self, ray: &Ray, after: f64, out: &mut Vec<(BlockId, IntervalSet)>) -> f64 {
+    fn collect_sets_to_first_end(&self, ray: &Ray, after: f64, out: &mut Sets) -> f64 {
         out.clear();
+        let eps = self.epsilon;
         let mut push = |i: u32, spans: &Spans, t_max: &mut f64| {
-            let set = self.without_epsilon(spans.set());
-            for iv in set.iter() {
+            for iv in out.push(BlockId(i), spans.as_slice(), eps) {
                 for e in [iv.enter.t, iv.exit.t] {
                     if e > after && e < *t_max {
                         *t_max = e;
                     }
                 }
-            }
-            if !set.is_empty() {
-                out.push((BlockId(i), set));
             }
         };
         let rb = RayBoxes::new(ray);
@@ -741,40 +796,25 @@ impl Complex {
             let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
             push(i, &sp, t_max)
         });
-        out.sort_unstable_by_key(|(id, _)| *id);
+        out.sort();
         t_max
     }
 
     /// The partition, with caller-provided buffers for the sets and cuts.
-    fn partition_core(
-        &self,
-        ray: &Ray,
-        sets: &mut Vec<(BlockId, IntervalSet)>,
-        cuts: &mut Vec<f64>,
-        out: &mut Partition,
-    ) {
+    fn partition_core(&self, ray: &Ray, sets: &mut Sets, cuts: &mut Vec<f64>, out: &mut Partition) {
         self.collect_sets(ray, f64::INFINITY, sets);
         self.partition_of_sets(ray, sets, cuts, f64::INFINITY, out);
     }
 
     /// The partition formed from `sets` (sorted by block id), its events
     /// only up to `until` (the segments up to the first one past it).
-    fn partition_of_sets(
-        &self,
-        ray: &Ray,
-        sets: &mut [(BlockId, IntervalSet)],
-        cuts: &mut Vec<f64>,
-        until: f64,
-        out: &mut Partition,
-    ) {
+    fn partition_of_sets(&self, ray: &Ray, sets: &mut Sets, cuts: &mut Vec<f64>, until: f64, out: &mut Partition) {
         out.clear();
-        let gather = |sets: &[(BlockId, IntervalSet)], cuts: &mut Vec<f64>| {
+        let gather = |sets: &Sets, cuts: &mut Vec<f64>| {
             cuts.clear();
             cuts.push(0.0);
-            for (_, s) in sets.iter() {
-                for iv in s.iter() {
-                    cuts.extend([iv.enter.t, iv.exit.t].into_iter().filter(|t| *t > 0.0 && t.is_finite()));
-                }
+            for iv in &sets.intervals {
+                cuts.extend([iv.enter.t, iv.exit.t].into_iter().filter(|t| *t > 0.0 && t.is_finite()));
             }
             cuts.sort_unstable_by(f64::total_cmp);
         };
@@ -782,10 +822,14 @@ impl Complex {
         // Certified: ends of different blocks that their bounds cannot order
         // are ordered exactly (a cold path, only when two ends are close).
         if self.kernel.precision == quadric::Precision::Certified
+            && sets.len() > 1
             && cuts.windows(2).any(|w| w[1] - w[0] <= crate::block::NEAR_TIE * w[1].abs())
-            && crate::block::settle_block_ties(ray, &self.blocks, sets)
         {
-            gather(sets, cuts);
+            let mut moved = sets.to_vec();
+            if crate::block::settle_block_ties(ray, &self.blocks, &mut moved) {
+                sets.assign(&moved);
+                gather(sets, cuts);
+            }
         }
         cuts.dedup();
         // Past `until` only the first cut is needed: it ends the segment
@@ -801,14 +845,14 @@ impl Complex {
             let owner = owner_of(
                 sets.iter()
                     .filter(|(_, s)| s.iter().any(|iv| iv.enter.t <= a && b <= iv.exit.t))
-                    .map(|(id, _)| (*id, self.blocks[id.index()].opacity())),
+                    .map(|(id, _)| (id, self.blocks[id.index()].opacity())),
             );
             match out.segments.last_mut() {
                 Some(last) if last.owner == owner => last.end = b,
                 _ => out.segments.push(Segment { start: a, end: b, owner }),
             }
         }
-        let set_of = |id: BlockId| sets.binary_search_by_key(&id, |(i, _)| *i).ok().map(|k| &sets[k].1);
+        let set_of = |id: BlockId| sets.get(id);
         for w in out.segments.windows(2) {
             let (s0, s1) = (w[0], w[1]);
             let t = s1.start;
