@@ -79,10 +79,6 @@ pub(crate) struct RayBoxes {
     /// ray meets the padded face at `b` where `t = (b + shift) / d`.
     shift_lo: [f64; 3],
     shift_hi: [f64; 3],
-    /// The same, four lanes each, for the nodes.
-    inv4: [f64x4; 3],
-    shift_lo4: [f64x4; 3],
-    shift_hi4: [f64x4; 3],
 }
 
 impl RayBoxes {
@@ -104,14 +100,7 @@ impl RayBoxes {
         // parallel axis, `∞ - ∞`, and with it every cull along that axis.)
         let shift_lo = o.map(|o| -o - pad);
         let shift_hi = o.map(|o| -o + pad);
-        RayBoxes {
-            inv,
-            shift_lo,
-            shift_hi,
-            inv4: inv.map(f64x4::splat),
-            shift_lo4: shift_lo.map(f64x4::splat),
-            shift_hi4: shift_hi.map(f64x4::splat),
-        }
+        RayBoxes { inv, shift_lo, shift_hi }
     }
 
     /// The entry parameter of the ray into the closed box within
@@ -171,8 +160,10 @@ impl RayBoxes {
     fn enter4(&self, node: &Node4, t_min: f64, t_max: f64) -> (f64x4, u32) {
         let (mut t0, mut t1) = (f64x4::splat(t_min), f64x4::splat(t_max));
         for i in 0..3 {
-            let a = (node.min[i] + self.shift_lo4[i]) * self.inv4[i];
-            let b = (node.max[i] + self.shift_hi4[i]) * self.inv4[i];
+            // Broadcast loads: cheaper than keeping four-lane copies per ray.
+            let inv = f64x4::splat(self.inv[i]);
+            let a = (node.min[i] + f64x4::splat(self.shift_lo[i])) * inv;
+            let b = (node.max[i] + f64x4::splat(self.shift_hi[i])) * inv;
             let (a, b) = if self.inv[i] >= 0.0 { (a, b) } else { (b, a) };
             // `if a > t0 { t0 = a }` lane by lane: NaN keeps `t0`.
             t0 = a.cmp_gt(t0).blend(a, t0);
