@@ -254,7 +254,26 @@ impl Bvh {
     /// position in [`Bvh::items`]; `visit` may lower `*t_max` to cut off
     /// everything farther away (early exit).
     #[inline]
-    pub(crate) fn traverse(
+    pub(crate) fn traverse(&self, ray: &RayBoxes, t_min: f64, t_max: &mut f64, visit: impl FnMut(u32, f64, &mut f64)) {
+        self.walk::<true>(ray, t_min, t_max, visit);
+    }
+
+    /// [`Bvh::traverse`] in no particular order, for any-hit queries: the
+    /// same blocks (less those `visit` cuts off), without sorting the
+    /// children a node step enters.
+    #[inline]
+    pub(crate) fn traverse_any(
+        &self,
+        ray: &RayBoxes,
+        t_min: f64,
+        t_max: &mut f64,
+        visit: impl FnMut(u32, f64, &mut f64),
+    ) {
+        self.walk::<false>(ray, t_min, t_max, visit);
+    }
+
+    #[inline(always)]
+    fn walk<const NEAREST_FIRST: bool>(
         &self,
         ray: &RayBoxes,
         t_min: f64,
@@ -283,6 +302,14 @@ impl Bvh {
             let node = &self.nodes[child as usize];
             let (entry, mut hits) = ray.enter4(node, t_min, *t_max);
             let entry = entry.to_array();
+            if !NEAREST_FIRST {
+                while hits != 0 {
+                    let lane = hits.trailing_zeros() as usize;
+                    hits &= hits - 1;
+                    stack.push((u64::from(node.child[lane]) | u64::from(node.count[lane]) << 32, entry[lane]));
+                }
+                continue;
+            }
             // The children entered, nearest first (insertion into at most
             // four places), pushed farthest first so the nearest pops next.
             let mut order = [(0.0f64, 0u64); 4];

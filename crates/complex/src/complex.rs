@@ -354,7 +354,7 @@ impl Complex {
         };
         let rb = RayBoxes::new(ray);
         let mut t_max = max_t;
-        self.bvh.traverse(&rb, 0.0, &mut t_max, |k, _, _| {
+        self.bvh.traverse_any(&rb, 0.0, &mut t_max, |k, _, _| {
             let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
             push(i, &sp)
         });
@@ -463,7 +463,7 @@ impl Complex {
         for i in self.unbounded_crossed(&rb, eps, max_t) {
             look(&self.block_spans(i, ray, &rb), &mut t_max);
         }
-        self.bvh.traverse(&rb, eps, &mut t_max, |k, _, t_max| look(&self.slot_spans(k, ray, &rb), t_max));
+        self.bvh.traverse_any(&rb, eps, &mut t_max, |k, _, t_max| look(&self.slot_spans(k, ray, &rb), t_max));
         if run_end > eps {
             return self.run_exit(ray, &rb, run_end, max_t).is_some();
         }
@@ -505,7 +505,7 @@ impl Complex {
             }
         };
         let mut t_hi = t;
-        self.bvh.traverse(rb, t, &mut t_hi, |k, _, _| {
+        self.bvh.traverse_any(rb, t, &mut t_hi, |k, _, _| {
             let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, rb));
             consider(i, &sp)
         });
@@ -655,7 +655,7 @@ impl Complex {
                 }
             };
             let mut t_hi = run_end;
-            self.bvh.traverse(rb, self.epsilon, &mut t_hi, |k, _, _| {
+            self.bvh.traverse_any(rb, self.epsilon, &mut t_hi, |k, _, _| {
                 let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, rb));
                 extend(i, &sp)
             });
