@@ -721,12 +721,25 @@ impl Complex {
     /// per-thread scratch buffers): only blocks whose boxes the ray crosses
     /// are visited.
     pub fn partition_into(&self, ray: &Ray, out: &mut Partition) {
+        self.partition_with(ray, f64::INFINITY, out);
+    }
+
+    /// The segments of [`Complex::partition`] alone, into `out.segments`
+    /// (`out.events` is left empty): no hit points or normals are computed.
+    /// What a shadow ray needs to weigh the media between a point and a
+    /// light. Allocates only as [`Complex::partition_into`] does.
+    pub fn segments_into(&self, ray: &Ray, out: &mut Partition) {
+        self.partition_with(ray, f64::NEG_INFINITY, out);
+    }
+
+    /// The partition with its events up to `until` (see `partition_of_sets`).
+    fn partition_with(&self, ray: &Ray, until: f64, out: &mut Partition) {
         SCRATCH.with(|s| match s.try_borrow_mut() {
             Ok(mut s) => {
                 let Scratch { sets, cuts } = &mut *s;
-                self.partition_core(ray, sets, cuts, out);
+                self.partition_core(ray, sets, cuts, until, out);
             }
-            Err(_) => self.partition_core(ray, &mut Sets::default(), &mut Vec::new(), out),
+            Err(_) => self.partition_core(ray, &mut Sets::default(), &mut Vec::new(), until, out),
         });
     }
 
@@ -760,11 +773,11 @@ impl Complex {
                     }
                     after = until;
                 }
-                self.partition_core(ray, sets, cuts, out);
+                self.partition_core(ray, sets, cuts, f64::INFINITY, out);
                 found(out)
             }
             Err(_) => {
-                self.partition_core(ray, &mut Sets::default(), &mut Vec::new(), out);
+                self.partition_core(ray, &mut Sets::default(), &mut Vec::new(), f64::INFINITY, out);
                 found(out)
             }
         })
@@ -800,14 +813,16 @@ impl Complex {
         t_max
     }
 
-    /// The partition, with caller-provided buffers for the sets and cuts.
-    fn partition_core(&self, ray: &Ray, sets: &mut Sets, cuts: &mut Vec<f64>, out: &mut Partition) {
+    /// The partition with its events up to `until`, with caller-provided
+    /// buffers for the sets and cuts.
+    fn partition_core(&self, ray: &Ray, sets: &mut Sets, cuts: &mut Vec<f64>, until: f64, out: &mut Partition) {
         self.collect_sets(ray, f64::INFINITY, sets);
-        self.partition_of_sets(ray, sets, cuts, f64::INFINITY, out);
+        self.partition_of_sets(ray, sets, cuts, until, out);
     }
 
     /// The partition formed from `sets` (sorted by block id), its events
-    /// only up to `until` (the segments up to the first one past it).
+    /// only up to `until` (the segments up to the first one past it; all of
+    /// them, and no events, for `until = -∞`).
     fn partition_of_sets(&self, ray: &Ray, sets: &mut Sets, cuts: &mut Vec<f64>, until: f64, out: &mut Partition) {
         out.clear();
         let gather = |sets: &Sets, cuts: &mut Vec<f64>| {
@@ -834,8 +849,10 @@ impl Complex {
         cuts.dedup();
         // Past `until` only the first cut is needed: it ends the segment
         // after an event at `until`.
-        if let Some(k) = cuts.iter().position(|&c| c > until) {
-            cuts.truncate(k + 1);
+        if until > f64::NEG_INFINITY {
+            if let Some(k) = cuts.iter().position(|&c| c > until) {
+                cuts.truncate(k + 1);
+            }
         }
         cuts.push(f64::INFINITY);
         for w in cuts.windows(2) {

@@ -199,6 +199,14 @@ proptest! {
                 prop_assert_eq!(Some(&e), p.events.iter().find(|x| x.t == e.t));
             }
 
+            // segments_into is the partition's segments, without its events
+            // (into a buffer that held another partition).
+            let mut segments = p.clone();
+            segments.segments.reverse();
+            c.segments_into(ray, &mut segments);
+            prop_assert_eq!(&segments.segments, &p.segments);
+            prop_assert!(segments.events.is_empty());
+
             // occluded is "the first visible event is within max_t".
             let mut limits = vec![f64::INFINITY, 0.5, 3.0, eps];
             if let Some(t) = first {

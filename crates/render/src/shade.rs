@@ -262,7 +262,8 @@ impl<'w> Shader<'w> {
             // Any blocker will do: an any-hit query, no nearest-hit ordering.
             return if self.complex.occluded(&ray, dist) { Vector3::zeros() } else { one };
         }
-        self.complex.partition_into(&ray, &mut scratch.partition);
+        // The media crossed are in the segments; no event (hit point, normal) is needed.
+        self.complex.segments_into(&ray, &mut scratch.partition);
         let mut pass = one;
         let mut previous: Option<complex::MaterialKey> = None;
         for s in &scratch.partition.segments {
