@@ -90,6 +90,8 @@ const BOUNDED_TRIES: usize = 3;
 #[derive(Default)]
 struct Scratch {
     sets: Sets,
+    /// The sets of [`Complex::first_interface`]'s previous try.
+    previous: Sets,
     cuts: Vec<f64>,
 }
 
@@ -111,15 +113,17 @@ impl Sets {
     }
 
     /// Adds block `id`'s intervals that reach past `eps` (the ε rule: an
-    /// interval inside `[0, ε]` is no hit), if there are any.
+    /// interval inside `[0, ε]` is no hit), if there are any (with none,
+    /// an empty entry if `keep_empty`: it records that the block was
+    /// looked at).
     #[inline]
-    fn push(&mut self, id: BlockId, intervals: &[Interval], eps: f64) -> &[Interval] {
+    fn push(&mut self, id: BlockId, intervals: &[Interval], eps: f64, keep_empty: bool) -> &[Interval] {
         let first = self.intervals.len();
         // Sorted and disjoint: the intervals ending by ε are a prefix.
         let keep = intervals.iter().position(|iv| iv.exit.t > eps).unwrap_or(intervals.len());
         self.intervals.extend_from_slice(&intervals[keep..]);
         let n = self.intervals.len() - first;
-        if n > 0 {
+        if n > 0 || keep_empty {
             self.blocks.push((id, first as u32, n as u32));
         }
         &self.intervals[first..]
@@ -158,7 +162,7 @@ impl Sets {
     fn assign(&mut self, sets: &[(BlockId, IntervalSet)]) {
         self.clear();
         for (id, set) in sets {
-            self.push(*id, set.as_slice(), f64::NEG_INFINITY);
+            self.push(*id, set.as_slice(), f64::NEG_INFINITY, false);
         }
     }
 }
@@ -350,7 +354,7 @@ impl Complex {
         out.clear();
         let eps = self.epsilon;
         let mut push = |i: u32, spans: &Spans| {
-            out.push(BlockId(i), spans.as_slice(), eps);
+            out.push(BlockId(i), spans.as_slice(), eps, false);
         };
         let rb = RayBoxes::new(ray);
         let mut t_max = max_t;
@@ -736,7 +740,7 @@ impl Complex {
     fn partition_with(&self, ray: &Ray, until: f64, out: &mut Partition) {
         SCRATCH.with(|s| match s.try_borrow_mut() {
             Ok(mut s) => {
-                let Scratch { sets, cuts } = &mut *s;
+                let Scratch { sets, cuts, .. } = &mut *s;
                 self.partition_core(ray, sets, cuts, until, out);
             }
             Err(_) => self.partition_core(ray, &mut Sets::default(), &mut Vec::new(), until, out),
@@ -760,10 +764,17 @@ impl Complex {
         let found = |out: &Partition| out.events.iter().find(|e| e.t > eps && !e.same_medium).copied();
         SCRATCH.with(|s| match s.try_borrow_mut() {
             Ok(mut s) => {
-                let Scratch { sets, cuts } = &mut *s;
+                let Scratch { sets, previous, cuts } = &mut *s;
                 let mut after = eps;
-                for _ in 0..BOUNDED_TRIES {
-                    let until = self.collect_sets_to_first_end(ray, after, sets);
+                for attempt in 0..BOUNDED_TRIES {
+                    // A retry meets the blocks of the last try again: their
+                    // sets are taken from it, not computed anew. (Not in
+                    // Certified, whose settlement may have moved them.)
+                    let reuse = attempt > 0 && self.kernel.precision != quadric::Precision::Certified;
+                    if reuse {
+                        core::mem::swap(sets, previous);
+                    }
+                    let until = self.collect_sets_to_first_end(ray, after, sets, reuse.then_some(&*previous));
                     self.partition_of_sets(ray, sets, cuts, until, out);
                     // Events are formed only up to `until`, where they are
                     // exact. With `until = ∞` nothing was cut off.
@@ -787,12 +798,14 @@ impl Complex {
     /// the first interval end `T` after `after` among the blocks visited,
     /// which it returns (`∞` if there is none): every block with an
     /// interval meeting `[0, T]` is collected (its padded box is entered by
-    /// `T`), possibly with some farther ones.
-    fn collect_sets_to_first_end(&self, ray: &Ray, after: f64, out: &mut Sets) -> f64 {
+    /// `T`), possibly with some farther ones. Every block visited gets an
+    /// entry, empty or not; those found in `previous` (the same ray's
+    /// sets, collected this way) are copied from it.
+    fn collect_sets_to_first_end(&self, ray: &Ray, after: f64, out: &mut Sets, previous: Option<&Sets>) -> f64 {
         out.clear();
         let eps = self.epsilon;
-        let mut push = |i: u32, spans: &Spans, t_max: &mut f64| {
-            for iv in out.push(BlockId(i), spans.as_slice(), eps) {
+        let mut push = |i: u32, intervals: &[Interval], t_max: &mut f64| {
+            for iv in out.push(BlockId(i), intervals, eps, true) {
                 for e in [iv.enter.t, iv.exit.t] {
                     if e > after && e < *t_max {
                         *t_max = e;
@@ -800,14 +813,21 @@ impl Complex {
                 }
             }
         };
+        let known = |i: u32| previous.and_then(|p| p.get(BlockId(i)));
         let rb = RayBoxes::new(ray);
         let mut t_max = f64::INFINITY;
         for i in self.unbounded_crossed(&rb, 0.0, f64::INFINITY) {
-            push(i, &self.block_spans(i, ray, &rb), &mut t_max);
+            match known(i) {
+                Some(ivs) => push(i, ivs, &mut t_max),
+                None => push(i, self.block_spans(i, ray, &rb).as_slice(), &mut t_max),
+            }
         }
         self.bvh.traverse(&rb, 0.0, &mut t_max, |k, _, t_max| {
-            let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
-            push(i, &sp, t_max)
+            let i = self.kernel.block(k);
+            match known(i) {
+                Some(ivs) => push(i, ivs, t_max),
+                None => push(i, self.slot_spans(k, ray, &rb).as_slice(), t_max),
+            }
         });
         out.sort();
         t_max
