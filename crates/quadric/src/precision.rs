@@ -277,12 +277,13 @@ impl Quadric {
             for i in 0..3 {
                 f.add_product(a[(i, i)], y[i], y[i]);
                 f.add_product(2.0 * self.w[i], y[i], 1.0);
-                for j in i + 1..3 {
+                // A diagonal `A`'s cross terms are exact zeros, which add nothing.
+                for j in (i + 1..3).filter(|_| !self.diagonal) {
                     f.add_product(2.0 * a[(i, j)], y[i], y[j]);
                 }
             }
             f.add(self.k);
-            (f.value(), 2.0 * (a * y + self.w))
+            (f.value(), 2.0 * (self.a_times(y) + self.w))
         })
     }
 }

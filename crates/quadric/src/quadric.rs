@@ -49,6 +49,11 @@ pub struct Quadric {
     /// leaves the stored `A` slightly definite along it. Queries far along
     /// it slide the point along `n` first (see [`Quadric::axis`]).
     axis: Vector3<f64>,
+    /// `A` is diagonal (its off-diagonal entries are exact zeros): an
+    /// axis-aligned quadric, such as every sphere and every cylinder or
+    /// ellipsoid in normal form, whose products `A v` take three
+    /// multiplications (see `Quadric::a_times`).
+    diagonal: bool,
 }
 
 impl Quadric {
@@ -87,7 +92,20 @@ impl Quadric {
         };
         let axis =
             if axis.iter().all(|x| x.is_finite()) && axis.amax() > 0.0 { axis / axis.amax() } else { Vector3::zeros() };
-        Quadric { centre, a, w, k, definite, flat: a.amax() / 16.0, axis }
+        let diagonal = (0..3).all(|i| (0..3).all(|j| i == j || a[(i, j)] == 0.0));
+        Quadric { centre, a, w, k, definite, flat: a.amax() / 16.0, axis, diagonal }
+    }
+
+    /// `A v`: for a diagonal `A` three products, the same values as the full
+    /// product (whose other six products are exact zeros; at most the sign of
+    /// a zero component can differ, which no decision reads).
+    #[inline(always)]
+    pub(crate) fn a_times(&self, v: &Vector3<f64>) -> Vector3<f64> {
+        if self.diagonal {
+            Vector3::new(self.a.m11 * v.x, self.a.m22 * v.y, self.a.m33 * v.z)
+        } else {
+            self.a * v
+        }
     }
 
     fn diagonal(a: f64, b: f64, c: f64, k: f64) -> Self {
@@ -377,7 +395,7 @@ impl Quadric {
         } else {
             (d, lo, lambda0, base)
         };
-        let ar = self.a * r;
+        let ar = self.a_times(&r);
         let rw = r.dot(&self.w);
         let s = r.dot(&ar);
         // `t = rᵀ(A b + w) = (Ar)·b + rᵀw` (`A` symmetric), in parallel to `g`.
@@ -393,7 +411,7 @@ impl Quadric {
             Some(false) => s.min(0.0),
             None => s,
         };
-        let g = self.a * base + self.w;
+        let g = self.a_times(&base) + self.w;
         let u = base.dot(&(g + self.w)) + self.k + 2.0 * lo.dot(&g);
         if s == 0.0 {
             return linear_set(t, u, lambda0, solid);
@@ -446,7 +464,7 @@ impl Quadric {
         } else {
             self.nearly_flat_s_t(r, &base, lo, rw).1
         };
-        let g = self.a * base + self.w;
+        let g = self.a_times(&base) + self.w;
         let u = base.dot(&(g + self.w)) + self.k + 2.0 * lo.dot(&g);
         let disc = difference_of_products(t, t, s, u);
         disc.is_finite().then(|| quadratic_set(s, t, u, disc, lambda1, solid))
@@ -596,6 +614,31 @@ fn quadratic_set(s: f64, t: f64, u: f64, disc: f64, lambda0: f64, solid: u32) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    proptest::proptest! {
+        /// The diagonal fast path (`Quadric::a_times`, the hit point's
+        /// cross terms) answers exactly what the full product does.
+        #[test]
+        fn diagonal_path_is_the_full_product(
+            abc in proptest::array::uniform3(-4.0..4.0f64),
+            ghj in proptest::array::uniform3(-2.0..2.0f64),
+            k in -3.0..3.0f64,
+            ray in crate::strategies::ray(6.0),
+        ) {
+            let Ok(q) = Quadric::from_coefficients([abc[0], abc[1], abc[2], 0.0, 0.0, 0.0, ghj[0], ghj[1], ghj[2], k]) else {
+                return Ok(());
+            };
+            proptest::prop_assert!(q.diagonal);
+            let full = Quadric { diagonal: false, ..q };
+            let (fast, slow) = (q.intervals(&ray, 0), full.intervals(&ray, 0));
+            proptest::prop_assert_eq!(fast.as_slice(), slow.as_slice());
+            for iv in fast.iter() {
+                for t in [iv.enter.t, iv.exit.t].into_iter().filter(|t| t.is_finite()) {
+                    proptest::prop_assert_eq!(q.hit_point(&ray, t), full.hit_point(&ray, t));
+                }
+            }
+        }
+    }
 
     fn check_semi_definite(rows: [[f64; 3]; 3], expected: bool) {
         let m = Matrix3::from_fn(|i, j| rows[i][j]);
