@@ -224,7 +224,8 @@ pub enum Step {
     /// Rotation about z in degrees (x towards y).
     RotateZ(f64),
     /// A general affine 4x4 matrix, row-major, last row `[0, 0, 0, 1]`.
-    Matrix([[f64; 4]; 4]),
+    // Boxed: inline, it would make every step 136 bytes instead of 32.
+    Matrix(Box<[[f64; 4]; 4]>),
 }
 
 /// A scale factor: one number or one per axis.
@@ -319,13 +320,15 @@ pub struct HyperboloidSpec {
 /// One solid of a block: exactly one shape key plus options.
 #[derive(Clone, Debug, Default, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
+// Scenes hold hundreds of thousands of these, so the larger, rarer shape
+// options are boxed: 120 bytes instead of 256 (the JSON is the same).
 pub struct ObjectSpec {
     /// The unit sphere `x² + y² + z² ≤ 1`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sphere: Option<SphereSpec>,
+    pub sphere: Option<Box<SphereSpec>>,
     /// The infinite unit tube along y, `x² + z² ≤ 1`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub cylinder: Option<CylinderSpec>,
+    pub cylinder: Option<Box<CylinderSpec>>,
     /// The double cone `x² − y² + z² ≤ 0`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cone: Option<Empty>,
@@ -338,7 +341,7 @@ pub struct ObjectSpec {
     /// Raw coefficients `[a, b, c, d, e, f, g, h, j, k]` of
     /// `a x² + b y² + c z² + 2d xy + 2e xz + 2f yz + 2g x + 2h y + 2j z + k ≤ 0`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub quadric: Option<[f64; 10]>,
+    pub quadric: Option<Box<[f64; 10]>>,
     /// The half-space `a x + b y + c z + d ≤ 0`, given as `[a, b, c, d]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub halfspace: Option<[f64; 4]>,
@@ -775,7 +778,7 @@ fn solid_of(o: &ObjectSpec, place: &str) -> Result<Solid, SceneError> {
             n => return Err(SceneError::semantic(place, format!("hyperboloid.sheets must be 1 or 2, got {n}"))),
         }
     } else if let Some(q) = &o.quadric {
-        Solid::from(Quadric::from_coefficients(*q).map_err(geo)?)
+        Solid::from(Quadric::from_coefficients(**q).map_err(geo)?)
     } else if let Some([a, b, c, d]) = o.halfspace {
         Solid::from(HalfSpace::new(a, b, c, d).map_err(geo)?)
     } else {
@@ -906,7 +909,7 @@ mod tests {
     fn group_nesting_built_in_code_is_bounded() {
         // JSON cannot nest this deep (serde_json stops at 128 levels), code can.
         let mut entry = Entry {
-            objects: Some(vec![ObjectSpec { sphere: Some(SphereSpec::default()), ..Default::default() }]),
+            objects: Some(vec![ObjectSpec { sphere: Some(Box::default()), ..Default::default() }]),
             ..Default::default()
         };
         for _ in 0..MAX_GROUP_DEPTH + 5 {
@@ -917,6 +920,13 @@ mod tests {
         scene.blocks = vec![entry];
         let err = scene.to_world().unwrap_err().to_string();
         assert!(err.contains("groups nest deeper than 100 levels") && err.starts_with("blocks[0].blocks[0]"), "{err}");
+    }
+
+    #[test]
+    fn object_specs_stay_small() {
+        // A large scene holds one per solid; see the comment on `ObjectSpec`.
+        assert!(std::mem::size_of::<ObjectSpec>() <= 120, "{}", std::mem::size_of::<ObjectSpec>());
+        assert!(std::mem::size_of::<Step>() <= 32, "{}", std::mem::size_of::<Step>());
     }
 
     #[test]
