@@ -445,11 +445,11 @@ fn vec3(t: Triple) -> Vector3<f64> {
     Vector3::new(t[0], t[1], t[2])
 }
 
-fn finite_triple(t: &Triple, place: &str, what: &str) -> Result<(), SceneError> {
+fn finite_triple(t: &Triple, place: impl std::fmt::Display, what: &str) -> Result<(), SceneError> {
     if t.iter().all(|c| c.is_finite()) {
         Ok(())
     } else {
-        Err(SceneError::semantic(place, format!("{what} must be finite")))
+        Err(SceneError::semantic(&place.to_string(), format!("{what} must be finite")))
     }
 }
 
@@ -465,9 +465,13 @@ fn colour(t: &Triple, place: &str, what: &str) -> Result<(), SceneError> {
 
 /// Composes a list of steps, the first acting first.
 pub fn transform_of(steps: &[Step], place: &str) -> Result<Transform, SceneError> {
+    steps_transform(steps, Place::Text(place))
+}
+
+/// [`transform_of`] with a lazy place: the path is only written out for an error.
+fn steps_transform(steps: &[Step], place: Place<'_>) -> Result<Transform, SceneError> {
     let mut m = Transform::identity();
     for (i, step) in steps.iter().enumerate() {
-        let here = format!("{place}.transform[{i}]");
         let t = match step {
             Step::Translate(v) => Transform::translate(vec3(*v)),
             Step::Scale(Scale::Uniform(s)) => Transform::scale(*s),
@@ -477,10 +481,43 @@ pub fn transform_of(steps: &[Step], place: &str) -> Result<Transform, SceneError
             Step::RotateZ(d) => Transform::rotate_z_degrees(*d),
             Step::Matrix(rows) => Transform::from_matrix(&Matrix4::from_fn(|r, c| rows[r][c])),
         }
-        .map_err(|e| SceneError::semantic(&here, e.to_string()))?;
+        .map_err(|e| SceneError::semantic(&place.item("transform", i).to_string(), e.to_string()))?;
         m = m.then(&t);
     }
     Ok(m)
+}
+
+/// A JSON path (`blocks[2].objects[0].transform[1]`) not yet written out:
+/// flattening a large scene names a place for every block, object and step,
+/// and only an error needs the text.
+#[derive(Clone, Copy)]
+enum Place<'a> {
+    /// A path already written out.
+    Text(&'a str),
+    /// `{parent}.{key}`.
+    Key(&'a Place<'a>, &'static str),
+    /// `{parent}.{key}[{index}]`.
+    Item(&'a Place<'a>, &'static str, usize),
+}
+
+impl<'a> Place<'a> {
+    fn key(&'a self, key: &'static str) -> Place<'a> {
+        Place::Key(self, key)
+    }
+
+    fn item(&'a self, key: &'static str, index: usize) -> Place<'a> {
+        Place::Item(self, key, index)
+    }
+}
+
+impl std::fmt::Display for Place<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Place::Text(s) => f.write_str(s),
+            Place::Key(parent, key) => write!(f, "{parent}.{key}"),
+            Place::Item(parent, key, index) => write!(f, "{parent}.{key}[{index}]"),
+        }
+    }
 }
 
 impl SceneFile {
@@ -612,12 +649,14 @@ struct Flattener<'a> {
 }
 
 impl Flattener<'_> {
-    fn material(&self, name: &str, place: &str, owner: &str) -> Result<usize, SceneError> {
+    /// The index of material `name`; `place` and `owner` (`block "x"`) name
+    /// the reference in the error.
+    fn material(&self, name: &str, place: Place<'_>, owner: &dyn std::fmt::Display) -> Result<usize, SceneError> {
         self.materials.keys().position(|k| k == name).ok_or_else(|| {
             let hint = crate::error::nearest(name, self.materials.keys().map(String::as_str))
                 .map(|n| format!(" (did you mean \"{n}\"?)"))
                 .unwrap_or_default();
-            SceneError::semantic(place, format!("{owner}: unknown material \"{name}\"{hint}"))
+            SceneError::semantic(&place.to_string(), format!("{owner}: unknown material \"{name}\"{hint}"))
         })
     }
 
@@ -627,8 +666,9 @@ impl Flattener<'_> {
             return Err(SceneError::semantic(place, format!("groups nest deeper than {MAX_GROUP_DEPTH} levels")));
         }
         for (i, e) in entries.iter().enumerate() {
+            // Every block keeps its path (`BlockInfo::path`), so it is written out here, once.
             let here = format!("{place}[{i}]");
-            let own = transform_of(&e.transform, &here)?;
+            let own = steps_transform(&e.transform, Place::Text(&here))?;
             match (&e.objects, &e.blocks) {
                 (Some(_), Some(_)) => {
                     return Err(SceneError::semantic(
@@ -657,7 +697,7 @@ impl Flattener<'_> {
                             format!("group \"{g}\" has `objects`; a group holds `blocks`"),
                         ));
                     }
-                    self.block(e, objects, &here, own, outer)?;
+                    self.block(e, objects, here, own, outer)?;
                 }
                 (None, None) => {
                     let what = match (&e.group, &e.name) {
@@ -672,31 +712,34 @@ impl Flattener<'_> {
         Ok(())
     }
 
+    /// `here`: the block's path, kept in its [`BlockInfo`].
     fn block(
         &mut self,
         e: &Entry,
         objects: &[ObjectSpec],
-        here: &str,
+        here: String,
         own: Transform,
         outer: &[Transform],
     ) -> Result<(), SceneError> {
         let name = e.name.clone().unwrap_or_else(|| format!("block {}", self.blocks.len() + 1));
-        let owner = format!("block \"{name}\"");
+        // The owner and object names of error messages, written out only for an error.
+        let owner = Owner { block: &name, object: None };
+        let who = |j: usize| Owner { block: &name, object: Some(j + 1) };
         if objects.is_empty() {
-            return Err(SceneError::semantic(here, format!("{owner} is empty: a block needs at least one object")));
+            return Err(SceneError::semantic(&here, format!("{owner} is empty: a block needs at least one object")));
         }
+        let place = Place::Text(&here);
         let material = match &e.material {
-            Some(m) => self.material(m, &format!("{here}.material"), &owner)?,
+            Some(m) => self.material(m, place.key("material"), &owner)?,
             None => self.default_material,
         };
         let placement = outer.iter().fold(own, |m, g| m.then(g));
         let mut solids = Vec::with_capacity(objects.len());
         let mut solid_materials = Vec::with_capacity(objects.len());
         for (j, o) in objects.iter().enumerate() {
-            let at = format!("{here}.objects[{j}]");
-            let who = format!("{owner}, object {}", j + 1);
-            let solid = solid_of(o, &at).map_err(|err| err.with_owner(&who))?;
-            let m = transform_of(&o.transform, &at).map_err(|err| err.with_owner(&who))?;
+            let at = place.item("objects", j);
+            let solid = solid_of(o, at).map_err(|err| err.with_owner(&who(j).to_string()))?;
+            let m = steps_transform(&o.transform, at).map_err(|err| err.with_owner(&who(j).to_string()))?;
             let solid = solid.transformed(&m.then(&placement));
             let finite = match &solid {
                 Solid::Quadric(q) => q.is_finite(),
@@ -705,26 +748,42 @@ impl Flattener<'_> {
             if !finite {
                 let msg = "the transforms (the object's, the block's and its groups') overflow: \
                            the placed solid has coefficients that are not finite";
-                return Err(SceneError::semantic(&at, format!("{who}: {msg}")));
+                return Err(SceneError::semantic(&at.to_string(), format!("{}: {msg}", who(j))));
             }
             solids.push(if o.complement { solid.complement() } else { solid });
             solid_materials.push(match &o.material {
-                Some(mat) => self.material(mat, &format!("{at}.material"), &who)?,
+                Some(mat) => self.material(mat, at.key("material"), &who(j))?,
                 None => material,
             });
         }
         let opacity = if e.transparent.unwrap_or(false) { Opacity::Transparent } else { Opacity::Opaque };
-        let block = Block::new(name.clone(), solids, opacity, MaterialKey(material as u32))
-            .map_err(|err| SceneError::semantic(here, err.to_string()))?;
+        let block = Block::new(name, solids, opacity, MaterialKey(material as u32))
+            .map_err(|err| SceneError::semantic(&here, err.to_string()))?;
         self.blocks.push(block);
-        self.infos.push(BlockInfo { material, solid_materials, path: here.to_string() });
+        self.infos.push(BlockInfo { material, solid_materials, path: here });
         Ok(())
     }
 }
 
+/// `block "x"` or `block "x", object 2` (1-based), as error messages name them.
+struct Owner<'a> {
+    block: &'a str,
+    object: Option<usize>,
+}
+
+impl std::fmt::Display for Owner<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "block \"{}\"", self.block)?;
+        match self.object {
+            Some(j) => write!(f, ", object {j}"),
+            None => Ok(()),
+        }
+    }
+}
+
 /// The solid an object describes, before its transform.
-fn solid_of(o: &ObjectSpec, place: &str) -> Result<Solid, SceneError> {
-    let keys: Vec<&str> = [
+fn solid_of(o: &ObjectSpec, place: Place<'_>) -> Result<Solid, SceneError> {
+    let keys = [
         (o.sphere.is_some(), "sphere"),
         (o.cylinder.is_some(), "cylinder"),
         (o.cone.is_some(), "cone"),
@@ -732,25 +791,24 @@ fn solid_of(o: &ObjectSpec, place: &str) -> Result<Solid, SceneError> {
         (o.hyperboloid.is_some(), "hyperboloid"),
         (o.quadric.is_some(), "quadric"),
         (o.halfspace.is_some(), "halfspace"),
-    ]
-    .into_iter()
-    .filter_map(|(set, k)| set.then_some(k))
-    .collect();
-    if keys.len() != 1 {
+    ];
+    if keys.iter().filter(|(set, _)| *set).count() != 1 {
+        let keys: Vec<&str> = keys.into_iter().filter_map(|(set, k)| set.then_some(k)).collect();
         let msg = if keys.is_empty() {
             "an object needs exactly one shape key (sphere, cylinder, cone, paraboloid, hyperboloid, quadric, halfspace)"
                 .to_string()
         } else {
             format!("an object has exactly one shape key, found {}", keys.join(", "))
         };
-        return Err(SceneError::semantic(place, msg));
+        return Err(SceneError::semantic(&place.to_string(), msg));
     }
-    let geo = |e: quadric::GeometryError| SceneError::semantic(place, e.to_string());
+    let err = |message: String| SceneError::semantic(&place.to_string(), message);
+    let geo = |e: quadric::GeometryError| err(e.to_string());
     let positive = |r: Option<f64>, what: &str| -> Result<f64, SceneError> {
         match r {
             None => Ok(1.0),
             Some(r) if r.is_finite() && r > 0.0 => Ok(r),
-            Some(r) => Err(SceneError::semantic(place, format!("{what} must be finite and > 0, got {r}"))),
+            Some(r) => Err(err(format!("{what} must be finite and > 0, got {r}"))),
         }
     };
     Ok(if let Some(s) = &o.sphere {
@@ -775,7 +833,7 @@ fn solid_of(o: &ObjectSpec, place: &str) -> Result<Solid, SceneError> {
         match h.sheets {
             1 => Solid::from(Quadric::hyperboloid_one_sheet()),
             2 => Solid::from(Quadric::hyperboloid_two_sheets()),
-            n => return Err(SceneError::semantic(place, format!("hyperboloid.sheets must be 1 or 2, got {n}"))),
+            n => return Err(err(format!("hyperboloid.sheets must be 1 or 2, got {n}"))),
         }
     } else if let Some(q) = &o.quadric {
         Solid::from(Quadric::from_coefficients(**q).map_err(geo)?)
