@@ -636,20 +636,75 @@ impl SceneFile {
             ior: 1.0,
         });
 
-        let mut flat = Flattener { materials: &self.materials, default_material, blocks: vec![], infos: vec![] };
-        flat.entries(&self.blocks, "blocks", &[])?;
-        if flat.blocks.is_empty() {
+        let (blocks, infos) = self.flattened(default_material)?;
+        if blocks.is_empty() {
             return Err(SceneError::semantic("blocks", "the scene has no blocks"));
         }
-        let complex = Complex::new(flat.blocks, ComplexOptions { epsilon: s.epsilon })
+        let complex = Complex::new(blocks, ComplexOptions { epsilon: s.epsilon })
             .map_err(|e| SceneError::semantic("blocks", e.to_string()))?;
-        Ok(World { camera, settings: s.clone(), lights, materials, complex, blocks: flat.infos })
+        Ok(World { camera, settings: s.clone(), lights, materials, complex, blocks: infos })
+    }
+
+    /// The blocks and their infos, groups flattened depth-first.
+    ///
+    /// A long `blocks` list is cut into runs flattened in parallel, each
+    /// knowing how many blocks come before it (for the default names
+    /// `block N`); the runs are joined in order and the first error in
+    /// document order is returned, so the result is the sequential one.
+    fn flattened(&self, default_material: usize) -> Result<(Vec<Block>, Vec<BlockInfo>), SceneError> {
+        use rayon::prelude::*;
+        /// Top-level entries per run (a run takes about a millisecond).
+        const RUN: usize = 1024;
+        let flattener =
+            |before| Flattener { materials: &self.materials, default_material, before, blocks: vec![], infos: vec![] };
+        if self.blocks.len() < 2 * RUN {
+            let mut flat = flattener(0);
+            flat.entries(&self.blocks, 0, "blocks", &[])?;
+            return Ok((flat.blocks, flat.infos));
+        }
+        let mut before = 0;
+        let runs: Vec<(usize, &[Entry], usize)> = self
+            .blocks
+            .chunks(RUN)
+            .enumerate()
+            .map(|(r, run)| {
+                let first = before;
+                before += run.iter().map(|e| block_count(e, 0)).sum::<usize>();
+                (r * RUN, run, first)
+            })
+            .collect();
+        let runs: Vec<Result<Flattener<'_>, SceneError>> = runs
+            .into_par_iter()
+            .map(|(first, run, before)| {
+                let mut flat = flattener(before);
+                flat.entries(run, first, "blocks", &[]).map(|()| flat)
+            })
+            .collect();
+        let (mut blocks, mut infos) = (Vec::with_capacity(before), Vec::with_capacity(before));
+        for run in runs {
+            let run = run?;
+            blocks.extend(run.blocks);
+            infos.extend(run.infos);
+        }
+        Ok((blocks, infos))
+    }
+}
+
+/// How many blocks flattening `e` yields if it is valid (an invalid entry
+/// stops flattening, so what it counts does not matter).
+fn block_count(e: &Entry, depth: usize) -> usize {
+    match (&e.objects, &e.blocks) {
+        (Some(_), None) => 1,
+        (None, Some(children)) if depth < MAX_GROUP_DEPTH => children.iter().map(|c| block_count(c, depth + 1)).sum(),
+        _ => 0,
     }
 }
 
 struct Flattener<'a> {
     materials: &'a BTreeMap<String, MaterialSpec>,
     default_material: usize,
+    /// Blocks that come before this flattener's first (in other runs).
+    before: usize,
     blocks: Vec<Block>,
     infos: Vec<BlockInfo>,
 }
@@ -666,12 +721,13 @@ impl Flattener<'_> {
         })
     }
 
-    /// `outer`: the enclosing groups' transforms, innermost first.
-    fn entries(&mut self, entries: &[Entry], place: &str, outer: &[Transform]) -> Result<(), SceneError> {
+    /// `entries` are those at `place[first..]`; `outer`: the enclosing
+    /// groups' transforms, innermost first.
+    fn entries(&mut self, entries: &[Entry], first: usize, place: &str, outer: &[Transform]) -> Result<(), SceneError> {
         if outer.len() > MAX_GROUP_DEPTH {
             return Err(SceneError::semantic(place, format!("groups nest deeper than {MAX_GROUP_DEPTH} levels")));
         }
-        for (i, e) in entries.iter().enumerate() {
+        for (i, e) in (first..).zip(entries) {
             // Every block keeps its path (`BlockInfo::path`), so it is written out here, once.
             let here = format!("{place}[{i}]");
             let own = steps_transform(&e.transform, Place::Text(&here))?;
@@ -694,7 +750,7 @@ impl Flattener<'_> {
                     }
                     let mut stack = vec![own];
                     stack.extend_from_slice(outer);
-                    self.entries(children, &format!("{here}.blocks"), &stack)?;
+                    self.entries(children, 0, &format!("{here}.blocks"), &stack)?;
                 }
                 (Some(objects), None) => {
                     if let Some(g) = &e.group {
@@ -727,7 +783,7 @@ impl Flattener<'_> {
         own: Transform,
         outer: &[Transform],
     ) -> Result<(), SceneError> {
-        let name = e.name.clone().unwrap_or_else(|| format!("block {}", self.blocks.len() + 1));
+        let name = e.name.clone().unwrap_or_else(|| format!("block {}", self.before + self.blocks.len() + 1));
         // The owner and object names of error messages, written out only for an error.
         let owner = Owner { block: &name, object: None };
         let who = |j: usize| Owner { block: &name, object: Some(j + 1) };
@@ -984,6 +1040,50 @@ mod tests {
         scene.blocks = vec![entry];
         let err = scene.to_world().unwrap_err().to_string();
         assert!(err.contains("groups nest deeper than 100 levels") && err.starts_with("blocks[0].blocks[0]"), "{err}");
+    }
+
+    /// Flattens `scene` in one run, as scenes shorter than two runs are.
+    fn sequential(scene: &SceneFile) -> Result<(Vec<Block>, Vec<BlockInfo>), SceneError> {
+        let materials = &scene.materials;
+        let mut flat =
+            Flattener { materials, default_material: materials.len(), before: 0, blocks: vec![], infos: vec![] };
+        flat.entries(&scene.blocks, 0, "blocks", &[])?;
+        Ok((flat.blocks, flat.infos))
+    }
+
+    #[test]
+    fn long_scenes_flatten_in_runs_as_in_one() {
+        let ball = || ObjectSpec { sphere: Some(Box::default()), ..Default::default() };
+        let block = |name: Option<String>| Entry { name, objects: Some(vec![ball()]), ..Default::default() };
+        let group = |blocks| Entry { group: Some("g".into()), blocks: Some(blocks), ..Default::default() };
+        // Unnamed blocks (named by their number) and groups of 0 to 3 blocks.
+        let entries: Vec<Entry> = (0..5001)
+            .map(|i| match i % 7 {
+                0 => group((0..i % 4).map(|_| block(None)).collect()),
+                1 => block(Some(format!("n{i}"))),
+                _ => block(None),
+            })
+            .collect();
+        let text = format!(r#"{{ {CAMERA}, "materials": {{ "a": {{}} }}, "blocks": [] }}"#);
+        let mut scene = SceneFile::from_json(&text).unwrap();
+        scene.blocks = entries;
+        let ours = scene.flattened(scene.materials.len()).unwrap();
+        let one = sequential(&scene).unwrap();
+        let names = |b: &[Block]| b.iter().map(|b| b.name().to_string()).collect::<Vec<_>>();
+        assert_eq!(names(&ours.0), names(&one.0));
+        assert_eq!(ours.1, one.1);
+        assert_eq!(ours.0.last().unwrap().name(), format!("block {}", one.0.len()));
+        // The first error in document order wins, whichever run finds it first.
+        scene.blocks[4100].objects = Some(vec![]);
+        scene.blocks[3000].material = Some("b".into());
+        scene.blocks[3006].objects = Some(vec![]);
+        let err = scene.flattened(scene.materials.len()).unwrap_err();
+        assert_eq!(err, sequential(&scene).unwrap_err());
+        assert!(err.to_string().starts_with("blocks[3000].material: block \"block "), "{err}");
+        scene.blocks[3000].material = None;
+        let err = scene.flattened(scene.materials.len()).unwrap_err();
+        assert_eq!(err, sequential(&scene).unwrap_err());
+        assert!(err.to_string().contains("is empty"), "{err}");
     }
 
     #[test]
