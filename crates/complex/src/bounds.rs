@@ -119,6 +119,19 @@ fn widen_up(x: f64, local: f64, abs: f64) -> f64 {
     x + WIDEN * local + WIDEN_ABS * (x.abs() + abs) + f64::MIN_POSITIVE
 }
 
+/// The box of each block, in order ([`block_box`]). Each box depends on its
+/// block alone, so large scenes compute them in parallel (on rayon's global
+/// pool) and get the same boxes whatever the number of threads.
+pub(crate) fn block_boxes(blocks: &[crate::Block]) -> Vec<Aabb> {
+    use rayon::prelude::*;
+    /// Below this many blocks the boxes take under a millisecond: not worth waking the pool.
+    const PARALLEL_FROM: usize = 1024;
+    if blocks.len() < PARALLEL_FROM {
+        return blocks.iter().map(|b| block_box(b.solids())).collect();
+    }
+    blocks.par_iter().with_min_len(256).map(|b| block_box(b.solids())).collect()
+}
+
 /// The tight, conservative box of the intersection of `solids`; infinite on
 /// the axes where the block is unbounded, [`Aabb::EMPTY`] if it is provably empty.
 pub(crate) fn block_box(solids: &[Solid]) -> Aabb {

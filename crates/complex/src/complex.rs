@@ -6,7 +6,7 @@ use quadric::nalgebra::{Point3, Vector3};
 use quadric::{Bound, Interval, IntervalSet, Ray};
 
 use crate::block::{SolidRef, Spans};
-use crate::bounds::block_box;
+use crate::bounds::block_boxes;
 use crate::bvh::{Bvh, RayBoxes};
 use crate::kernel::Kernel;
 use crate::partition::{Event, Partition, Segment, Surface};
@@ -184,7 +184,7 @@ impl Complex {
                 return Err(ComplexError::BadEpsilon(e));
             }
         }
-        let boxes: Vec<Aabb> = blocks.iter().map(|b| block_box(b.solids())).collect();
+        let boxes = block_boxes(&blocks);
         let mut bounded = Vec::new();
         let mut unbounded = Vec::new();
         for (i, b) in boxes.iter().enumerate() {

@@ -241,3 +241,32 @@ proptest! {
         check(solids, min, max);
     }
 }
+
+#[test]
+fn boxes_of_a_large_scene_do_not_depend_on_the_thread_count() {
+    // Enough blocks for `Complex::new` to compute the boxes in parallel.
+    let blocks: Vec<Block> = (0..3000)
+        .map(|i| {
+            let f = f64::from(i);
+            let m = rot_z(7.0 * f).then(&translate(f, 0.5 * f, -f));
+            let solids = match i % 3 {
+                0 => cuboid([-0.3; 3], [0.2, 0.4, 0.1]),
+                1 => post(0.0, 0.0, 0.2, -0.3, 0.3),
+                _ => vec![Solid::from(Quadric::sphere())],
+            };
+            block(&format!("b{i}"), moved(&solids, &m), O, 0)
+        })
+        .collect();
+    let boxes = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("a thread pool");
+        let c = pool.install(|| complex(blocks.clone()));
+        (0..blocks.len()).map(|i| c.block_aabb(complex::BlockId(i as u32))).collect::<Vec<Aabb>>()
+    };
+    let one = boxes(1);
+    assert_eq!(one, boxes(2));
+    assert_eq!(one, boxes(3));
+    // Each box is the one the block has on its own.
+    for i in (0..blocks.len()).step_by(97) {
+        assert_eq!(one[i], box_of(blocks[i].solids().to_vec()), "block {i}");
+    }
+}

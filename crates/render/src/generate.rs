@@ -64,7 +64,7 @@ pub fn sphereflake(level: u32) -> SceneFile {
         vec![(Vector3::new(0.0, 1.0, 0.0), 1.0, Vector3::y(), 0)];
     while let Some((centre, r, axis, depth)) = stack.pop() {
         let sphere = ObjectSpec {
-            sphere: Some(SphereSpec { radius: Some(r), center: Some([centre.x, centre.y, centre.z]) }),
+            sphere: Some(Box::new(SphereSpec { radius: Some(r), center: Some([centre.x, centre.y, centre.z]) })),
             ..ObjectSpec::default()
         };
         blocks.push(block(format!("sphere {}", blocks.len()), "flake", vec![sphere], vec![]));
@@ -132,7 +132,7 @@ pub fn grid(count: u32, seed: u64) -> SceneFile {
         let kind = rng.next() % 3;
         let objects = match kind {
             0 => vec![ObjectSpec {
-                sphere: Some(SphereSpec { radius: Some(rng.uniform(0.2, 0.45)), center: None }),
+                sphere: Some(Box::new(SphereSpec { radius: Some(rng.uniform(0.2, 0.45)), center: None })),
                 ..ObjectSpec::default()
             }],
             1 => {
@@ -140,7 +140,7 @@ pub fn grid(count: u32, seed: u64) -> SceneFile {
                 let h = rng.uniform(0.1, 0.35);
                 vec![
                     ObjectSpec {
-                        cylinder: Some(CylinderSpec { radius: Some(r), axis: Some(Axis::Y) }),
+                        cylinder: Some(Box::new(CylinderSpec { radius: Some(r), axis: Some(Axis::Y) })),
                         ..ObjectSpec::default()
                     },
                     halfspace([0.0, 1.0, 0.0, -h]),

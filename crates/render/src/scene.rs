@@ -224,7 +224,8 @@ pub enum Step {
     /// Rotation about z in degrees (x towards y).
     RotateZ(f64),
     /// A general affine 4x4 matrix, row-major, last row `[0, 0, 0, 1]`.
-    Matrix([[f64; 4]; 4]),
+    // Boxed: inline, it would make every step 136 bytes instead of 32.
+    Matrix(Box<[[f64; 4]; 4]>),
 }
 
 /// A scale factor: one number or one per axis.
@@ -319,13 +320,15 @@ pub struct HyperboloidSpec {
 /// One solid of a block: exactly one shape key plus options.
 #[derive(Clone, Debug, Default, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
+// Scenes hold hundreds of thousands of these, so the larger, rarer shape
+// options are boxed: 120 bytes instead of 256 (the JSON is the same).
 pub struct ObjectSpec {
     /// The unit sphere `x² + y² + z² ≤ 1`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sphere: Option<SphereSpec>,
+    pub sphere: Option<Box<SphereSpec>>,
     /// The infinite unit tube along y, `x² + z² ≤ 1`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub cylinder: Option<CylinderSpec>,
+    pub cylinder: Option<Box<CylinderSpec>>,
     /// The double cone `x² − y² + z² ≤ 0`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cone: Option<Empty>,
@@ -338,7 +341,7 @@ pub struct ObjectSpec {
     /// Raw coefficients `[a, b, c, d, e, f, g, h, j, k]` of
     /// `a x² + b y² + c z² + 2d xy + 2e xz + 2f yz + 2g x + 2h y + 2j z + k ≤ 0`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub quadric: Option<[f64; 10]>,
+    pub quadric: Option<Box<[f64; 10]>>,
     /// The half-space `a x + b y + c z + d ≤ 0`, given as `[a, b, c, d]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub halfspace: Option<[f64; 4]>,
@@ -442,11 +445,11 @@ fn vec3(t: Triple) -> Vector3<f64> {
     Vector3::new(t[0], t[1], t[2])
 }
 
-fn finite_triple(t: &Triple, place: &str, what: &str) -> Result<(), SceneError> {
+fn finite_triple(t: &Triple, place: impl std::fmt::Display, what: &str) -> Result<(), SceneError> {
     if t.iter().all(|c| c.is_finite()) {
         Ok(())
     } else {
-        Err(SceneError::semantic(place, format!("{what} must be finite")))
+        Err(SceneError::semantic(&place.to_string(), format!("{what} must be finite")))
     }
 }
 
@@ -462,9 +465,13 @@ fn colour(t: &Triple, place: &str, what: &str) -> Result<(), SceneError> {
 
 /// Composes a list of steps, the first acting first.
 pub fn transform_of(steps: &[Step], place: &str) -> Result<Transform, SceneError> {
+    steps_transform(steps, Place::Text(place))
+}
+
+/// [`transform_of`] with a lazy place: the path is only written out for an error.
+fn steps_transform(steps: &[Step], place: Place<'_>) -> Result<Transform, SceneError> {
     let mut m = Transform::identity();
     for (i, step) in steps.iter().enumerate() {
-        let here = format!("{place}.transform[{i}]");
         let t = match step {
             Step::Translate(v) => Transform::translate(vec3(*v)),
             Step::Scale(Scale::Uniform(s)) => Transform::scale(*s),
@@ -474,16 +481,55 @@ pub fn transform_of(steps: &[Step], place: &str) -> Result<Transform, SceneError
             Step::RotateZ(d) => Transform::rotate_z_degrees(*d),
             Step::Matrix(rows) => Transform::from_matrix(&Matrix4::from_fn(|r, c| rows[r][c])),
         }
-        .map_err(|e| SceneError::semantic(&here, e.to_string()))?;
+        .map_err(|e| SceneError::semantic(&place.item("transform", i).to_string(), e.to_string()))?;
         m = m.then(&t);
     }
     Ok(m)
+}
+
+/// A JSON path (`blocks[2].objects[0].transform[1]`) not yet written out:
+/// flattening a large scene names a place for every block, object and step,
+/// and only an error needs the text.
+#[derive(Clone, Copy)]
+enum Place<'a> {
+    /// A path already written out.
+    Text(&'a str),
+    /// `{parent}.{key}`.
+    Key(&'a Place<'a>, &'static str),
+    /// `{parent}.{key}[{index}]`.
+    Item(&'a Place<'a>, &'static str, usize),
+}
+
+impl<'a> Place<'a> {
+    fn key(&'a self, key: &'static str) -> Place<'a> {
+        Place::Key(self, key)
+    }
+
+    fn item(&'a self, key: &'static str, index: usize) -> Place<'a> {
+        Place::Item(self, key, index)
+    }
+}
+
+impl std::fmt::Display for Place<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Place::Text(s) => f.write_str(s),
+            Place::Key(parent, key) => write!(f, "{parent}.{key}"),
+            Place::Item(parent, key, index) => write!(f, "{parent}.{key}[{index}]"),
+        }
+    }
 }
 
 impl SceneFile {
     /// Parses a scene from JSON text. Errors carry the JSON path and the
     /// line and column.
     pub fn from_json(text: &str) -> Result<Self, SceneError> {
+        // Tracking the path costs about a third of the parse, and only an
+        // error needs it: a failed parse is run again with the tracker, which
+        // stops at the same place with the same error.
+        if let Ok(scene) = SceneFile::deserialize(&mut serde_json::Deserializer::from_str(text)) {
+            return Ok(scene);
+        }
         let de = &mut serde_json::Deserializer::from_str(text);
         let scene: SceneFile = serde_path_to_error::deserialize(de).map_err(SceneError::from_json)?;
         Ok(scene)
@@ -590,42 +636,101 @@ impl SceneFile {
             ior: 1.0,
         });
 
-        let mut flat = Flattener { materials: &self.materials, default_material, blocks: vec![], infos: vec![] };
-        flat.entries(&self.blocks, "blocks", &[])?;
-        if flat.blocks.is_empty() {
+        let (blocks, infos) = self.flattened(default_material)?;
+        if blocks.is_empty() {
             return Err(SceneError::semantic("blocks", "the scene has no blocks"));
         }
-        let complex = Complex::new(flat.blocks, ComplexOptions { epsilon: s.epsilon })
+        let complex = Complex::new(blocks, ComplexOptions { epsilon: s.epsilon })
             .map_err(|e| SceneError::semantic("blocks", e.to_string()))?;
-        Ok(World { camera, settings: s.clone(), lights, materials, complex, blocks: flat.infos })
+        Ok(World { camera, settings: s.clone(), lights, materials, complex, blocks: infos })
+    }
+
+    /// The blocks and their infos, groups flattened depth-first.
+    ///
+    /// A long `blocks` list is cut into runs flattened in parallel, each
+    /// knowing how many blocks come before it (for the default names
+    /// `block N`); the runs are joined in order and the first error in
+    /// document order is returned, so the result is the sequential one.
+    fn flattened(&self, default_material: usize) -> Result<(Vec<Block>, Vec<BlockInfo>), SceneError> {
+        use rayon::prelude::*;
+        /// Top-level entries per run (a run takes about a millisecond).
+        const RUN: usize = 1024;
+        let flattener =
+            |before| Flattener { materials: &self.materials, default_material, before, blocks: vec![], infos: vec![] };
+        if self.blocks.len() < 2 * RUN {
+            let mut flat = flattener(0);
+            flat.entries(&self.blocks, 0, "blocks", &[])?;
+            return Ok((flat.blocks, flat.infos));
+        }
+        let mut before = 0;
+        let runs: Vec<(usize, &[Entry], usize)> = self
+            .blocks
+            .chunks(RUN)
+            .enumerate()
+            .map(|(r, run)| {
+                let first = before;
+                before += run.iter().map(|e| block_count(e, 0)).sum::<usize>();
+                (r * RUN, run, first)
+            })
+            .collect();
+        let runs: Vec<Result<Flattener<'_>, SceneError>> = runs
+            .into_par_iter()
+            .map(|(first, run, before)| {
+                let mut flat = flattener(before);
+                flat.entries(run, first, "blocks", &[]).map(|()| flat)
+            })
+            .collect();
+        let (mut blocks, mut infos) = (Vec::with_capacity(before), Vec::with_capacity(before));
+        for run in runs {
+            let run = run?;
+            blocks.extend(run.blocks);
+            infos.extend(run.infos);
+        }
+        Ok((blocks, infos))
+    }
+}
+
+/// How many blocks flattening `e` yields if it is valid (an invalid entry
+/// stops flattening, so what it counts does not matter).
+fn block_count(e: &Entry, depth: usize) -> usize {
+    match (&e.objects, &e.blocks) {
+        (Some(_), None) => 1,
+        (None, Some(children)) if depth < MAX_GROUP_DEPTH => children.iter().map(|c| block_count(c, depth + 1)).sum(),
+        _ => 0,
     }
 }
 
 struct Flattener<'a> {
     materials: &'a BTreeMap<String, MaterialSpec>,
     default_material: usize,
+    /// Blocks that come before this flattener's first (in other runs).
+    before: usize,
     blocks: Vec<Block>,
     infos: Vec<BlockInfo>,
 }
 
 impl Flattener<'_> {
-    fn material(&self, name: &str, place: &str, owner: &str) -> Result<usize, SceneError> {
+    /// The index of material `name`; `place` and `owner` (`block "x"`) name
+    /// the reference in the error.
+    fn material(&self, name: &str, place: Place<'_>, owner: &dyn std::fmt::Display) -> Result<usize, SceneError> {
         self.materials.keys().position(|k| k == name).ok_or_else(|| {
             let hint = crate::error::nearest(name, self.materials.keys().map(String::as_str))
                 .map(|n| format!(" (did you mean \"{n}\"?)"))
                 .unwrap_or_default();
-            SceneError::semantic(place, format!("{owner}: unknown material \"{name}\"{hint}"))
+            SceneError::semantic(&place.to_string(), format!("{owner}: unknown material \"{name}\"{hint}"))
         })
     }
 
-    /// `outer`: the enclosing groups' transforms, innermost first.
-    fn entries(&mut self, entries: &[Entry], place: &str, outer: &[Transform]) -> Result<(), SceneError> {
+    /// `entries` are those at `place[first..]`; `outer`: the enclosing
+    /// groups' transforms, innermost first.
+    fn entries(&mut self, entries: &[Entry], first: usize, place: &str, outer: &[Transform]) -> Result<(), SceneError> {
         if outer.len() > MAX_GROUP_DEPTH {
             return Err(SceneError::semantic(place, format!("groups nest deeper than {MAX_GROUP_DEPTH} levels")));
         }
-        for (i, e) in entries.iter().enumerate() {
+        for (i, e) in (first..).zip(entries) {
+            // Every block keeps its path (`BlockInfo::path`), so it is written out here, once.
             let here = format!("{place}[{i}]");
-            let own = transform_of(&e.transform, &here)?;
+            let own = steps_transform(&e.transform, Place::Text(&here))?;
             match (&e.objects, &e.blocks) {
                 (Some(_), Some(_)) => {
                     return Err(SceneError::semantic(
@@ -645,7 +750,7 @@ impl Flattener<'_> {
                     }
                     let mut stack = vec![own];
                     stack.extend_from_slice(outer);
-                    self.entries(children, &format!("{here}.blocks"), &stack)?;
+                    self.entries(children, 0, &format!("{here}.blocks"), &stack)?;
                 }
                 (Some(objects), None) => {
                     if let Some(g) = &e.group {
@@ -654,7 +759,7 @@ impl Flattener<'_> {
                             format!("group \"{g}\" has `objects`; a group holds `blocks`"),
                         ));
                     }
-                    self.block(e, objects, &here, own, outer)?;
+                    self.block(e, objects, here, own, outer)?;
                 }
                 (None, None) => {
                     let what = match (&e.group, &e.name) {
@@ -669,31 +774,34 @@ impl Flattener<'_> {
         Ok(())
     }
 
+    /// `here`: the block's path, kept in its [`BlockInfo`].
     fn block(
         &mut self,
         e: &Entry,
         objects: &[ObjectSpec],
-        here: &str,
+        here: String,
         own: Transform,
         outer: &[Transform],
     ) -> Result<(), SceneError> {
-        let name = e.name.clone().unwrap_or_else(|| format!("block {}", self.blocks.len() + 1));
-        let owner = format!("block \"{name}\"");
+        let name = e.name.clone().unwrap_or_else(|| format!("block {}", self.before + self.blocks.len() + 1));
+        // The owner and object names of error messages, written out only for an error.
+        let owner = Owner { block: &name, object: None };
+        let who = |j: usize| Owner { block: &name, object: Some(j + 1) };
         if objects.is_empty() {
-            return Err(SceneError::semantic(here, format!("{owner} is empty: a block needs at least one object")));
+            return Err(SceneError::semantic(&here, format!("{owner} is empty: a block needs at least one object")));
         }
+        let place = Place::Text(&here);
         let material = match &e.material {
-            Some(m) => self.material(m, &format!("{here}.material"), &owner)?,
+            Some(m) => self.material(m, place.key("material"), &owner)?,
             None => self.default_material,
         };
         let placement = outer.iter().fold(own, |m, g| m.then(g));
         let mut solids = Vec::with_capacity(objects.len());
         let mut solid_materials = Vec::with_capacity(objects.len());
         for (j, o) in objects.iter().enumerate() {
-            let at = format!("{here}.objects[{j}]");
-            let who = format!("{owner}, object {}", j + 1);
-            let solid = solid_of(o, &at).map_err(|err| err.with_owner(&who))?;
-            let m = transform_of(&o.transform, &at).map_err(|err| err.with_owner(&who))?;
+            let at = place.item("objects", j);
+            let solid = solid_of(o, at).map_err(|err| err.with_owner(&who(j).to_string()))?;
+            let m = steps_transform(&o.transform, at).map_err(|err| err.with_owner(&who(j).to_string()))?;
             let solid = solid.transformed(&m.then(&placement));
             let finite = match &solid {
                 Solid::Quadric(q) => q.is_finite(),
@@ -702,26 +810,42 @@ impl Flattener<'_> {
             if !finite {
                 let msg = "the transforms (the object's, the block's and its groups') overflow: \
                            the placed solid has coefficients that are not finite";
-                return Err(SceneError::semantic(&at, format!("{who}: {msg}")));
+                return Err(SceneError::semantic(&at.to_string(), format!("{}: {msg}", who(j))));
             }
             solids.push(if o.complement { solid.complement() } else { solid });
             solid_materials.push(match &o.material {
-                Some(mat) => self.material(mat, &format!("{at}.material"), &who)?,
+                Some(mat) => self.material(mat, at.key("material"), &who(j))?,
                 None => material,
             });
         }
         let opacity = if e.transparent.unwrap_or(false) { Opacity::Transparent } else { Opacity::Opaque };
-        let block = Block::new(name.clone(), solids, opacity, MaterialKey(material as u32))
-            .map_err(|err| SceneError::semantic(here, err.to_string()))?;
+        let block = Block::new(name, solids, opacity, MaterialKey(material as u32))
+            .map_err(|err| SceneError::semantic(&here, err.to_string()))?;
         self.blocks.push(block);
-        self.infos.push(BlockInfo { material, solid_materials, path: here.to_string() });
+        self.infos.push(BlockInfo { material, solid_materials, path: here });
         Ok(())
     }
 }
 
+/// `block "x"` or `block "x", object 2` (1-based), as error messages name them.
+struct Owner<'a> {
+    block: &'a str,
+    object: Option<usize>,
+}
+
+impl std::fmt::Display for Owner<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "block \"{}\"", self.block)?;
+        match self.object {
+            Some(j) => write!(f, ", object {j}"),
+            None => Ok(()),
+        }
+    }
+}
+
 /// The solid an object describes, before its transform.
-fn solid_of(o: &ObjectSpec, place: &str) -> Result<Solid, SceneError> {
-    let keys: Vec<&str> = [
+fn solid_of(o: &ObjectSpec, place: Place<'_>) -> Result<Solid, SceneError> {
+    let keys = [
         (o.sphere.is_some(), "sphere"),
         (o.cylinder.is_some(), "cylinder"),
         (o.cone.is_some(), "cone"),
@@ -729,25 +853,24 @@ fn solid_of(o: &ObjectSpec, place: &str) -> Result<Solid, SceneError> {
         (o.hyperboloid.is_some(), "hyperboloid"),
         (o.quadric.is_some(), "quadric"),
         (o.halfspace.is_some(), "halfspace"),
-    ]
-    .into_iter()
-    .filter_map(|(set, k)| set.then_some(k))
-    .collect();
-    if keys.len() != 1 {
+    ];
+    if keys.iter().filter(|(set, _)| *set).count() != 1 {
+        let keys: Vec<&str> = keys.into_iter().filter_map(|(set, k)| set.then_some(k)).collect();
         let msg = if keys.is_empty() {
             "an object needs exactly one shape key (sphere, cylinder, cone, paraboloid, hyperboloid, quadric, halfspace)"
                 .to_string()
         } else {
             format!("an object has exactly one shape key, found {}", keys.join(", "))
         };
-        return Err(SceneError::semantic(place, msg));
+        return Err(SceneError::semantic(&place.to_string(), msg));
     }
-    let geo = |e: quadric::GeometryError| SceneError::semantic(place, e.to_string());
+    let err = |message: String| SceneError::semantic(&place.to_string(), message);
+    let geo = |e: quadric::GeometryError| err(e.to_string());
     let positive = |r: Option<f64>, what: &str| -> Result<f64, SceneError> {
         match r {
             None => Ok(1.0),
             Some(r) if r.is_finite() && r > 0.0 => Ok(r),
-            Some(r) => Err(SceneError::semantic(place, format!("{what} must be finite and > 0, got {r}"))),
+            Some(r) => Err(err(format!("{what} must be finite and > 0, got {r}"))),
         }
     };
     Ok(if let Some(s) = &o.sphere {
@@ -772,10 +895,10 @@ fn solid_of(o: &ObjectSpec, place: &str) -> Result<Solid, SceneError> {
         match h.sheets {
             1 => Solid::from(Quadric::hyperboloid_one_sheet()),
             2 => Solid::from(Quadric::hyperboloid_two_sheets()),
-            n => return Err(SceneError::semantic(place, format!("hyperboloid.sheets must be 1 or 2, got {n}"))),
+            n => return Err(err(format!("hyperboloid.sheets must be 1 or 2, got {n}"))),
         }
     } else if let Some(q) = &o.quadric {
-        Solid::from(Quadric::from_coefficients(*q).map_err(geo)?)
+        Solid::from(Quadric::from_coefficients(**q).map_err(geo)?)
     } else if let Some([a, b, c, d]) = o.halfspace {
         Solid::from(HalfSpace::new(a, b, c, d).map_err(geo)?)
     } else {
@@ -906,7 +1029,7 @@ mod tests {
     fn group_nesting_built_in_code_is_bounded() {
         // JSON cannot nest this deep (serde_json stops at 128 levels), code can.
         let mut entry = Entry {
-            objects: Some(vec![ObjectSpec { sphere: Some(SphereSpec::default()), ..Default::default() }]),
+            objects: Some(vec![ObjectSpec { sphere: Some(Box::default()), ..Default::default() }]),
             ..Default::default()
         };
         for _ in 0..MAX_GROUP_DEPTH + 5 {
@@ -917,6 +1040,57 @@ mod tests {
         scene.blocks = vec![entry];
         let err = scene.to_world().unwrap_err().to_string();
         assert!(err.contains("groups nest deeper than 100 levels") && err.starts_with("blocks[0].blocks[0]"), "{err}");
+    }
+
+    /// Flattens `scene` in one run, as scenes shorter than two runs are.
+    fn sequential(scene: &SceneFile) -> Result<(Vec<Block>, Vec<BlockInfo>), SceneError> {
+        let materials = &scene.materials;
+        let mut flat =
+            Flattener { materials, default_material: materials.len(), before: 0, blocks: vec![], infos: vec![] };
+        flat.entries(&scene.blocks, 0, "blocks", &[])?;
+        Ok((flat.blocks, flat.infos))
+    }
+
+    #[test]
+    fn long_scenes_flatten_in_runs_as_in_one() {
+        let ball = || ObjectSpec { sphere: Some(Box::default()), ..Default::default() };
+        let block = |name: Option<String>| Entry { name, objects: Some(vec![ball()]), ..Default::default() };
+        let group = |blocks| Entry { group: Some("g".into()), blocks: Some(blocks), ..Default::default() };
+        // Unnamed blocks (named by their number) and groups of 0 to 3 blocks.
+        let entries: Vec<Entry> = (0..5001)
+            .map(|i| match i % 7 {
+                0 => group((0..i % 4).map(|_| block(None)).collect()),
+                1 => block(Some(format!("n{i}"))),
+                _ => block(None),
+            })
+            .collect();
+        let text = format!(r#"{{ {CAMERA}, "materials": {{ "a": {{}} }}, "blocks": [] }}"#);
+        let mut scene = SceneFile::from_json(&text).unwrap();
+        scene.blocks = entries;
+        let ours = scene.flattened(scene.materials.len()).unwrap();
+        let one = sequential(&scene).unwrap();
+        let names = |b: &[Block]| b.iter().map(|b| b.name().to_string()).collect::<Vec<_>>();
+        assert_eq!(names(&ours.0), names(&one.0));
+        assert_eq!(ours.1, one.1);
+        assert_eq!(ours.0.last().unwrap().name(), format!("block {}", one.0.len()));
+        // The first error in document order wins, whichever run finds it first.
+        scene.blocks[4100].objects = Some(vec![]);
+        scene.blocks[3000].material = Some("b".into());
+        scene.blocks[3006].objects = Some(vec![]);
+        let err = scene.flattened(scene.materials.len()).unwrap_err();
+        assert_eq!(err, sequential(&scene).unwrap_err());
+        assert!(err.to_string().starts_with("blocks[3000].material: block \"block "), "{err}");
+        scene.blocks[3000].material = None;
+        let err = scene.flattened(scene.materials.len()).unwrap_err();
+        assert_eq!(err, sequential(&scene).unwrap_err());
+        assert!(err.to_string().contains("is empty"), "{err}");
+    }
+
+    #[test]
+    fn object_specs_stay_small() {
+        // A large scene holds one per solid; see the comment on `ObjectSpec`.
+        assert!(std::mem::size_of::<ObjectSpec>() <= 120, "{}", std::mem::size_of::<ObjectSpec>());
+        assert!(std::mem::size_of::<Step>() <= 32, "{}", std::mem::size_of::<Step>());
     }
 
     #[test]
