@@ -118,6 +118,11 @@ pub fn render_until(
     let rays: u64 = pool.install(|| {
         pixels
             .par_chunks_mut(width)
+            // Every row its own task: rows differ in cost by orders of
+            // magnitude (sky against glass), and rayon's adaptive split,
+            // made early from the thread count alone, left one of two
+            // cores idle for a quarter of the glass scene.
+            .with_max_len(1)
             .enumerate()
             .map(|(i, out)| {
                 if cancel.load(Ordering::Relaxed) {
