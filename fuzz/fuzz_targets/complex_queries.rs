@@ -5,7 +5,9 @@
 //! blocks; every block box holds the block's points; the partition covers
 //! `[0, ∞)` in order without gaps, its owners follow the priority rule and its
 //! events sit between its segments; `cast_ray` returns the first visible
-//! event of the partition in `(ε, max_t]`, with a finite point and normal.
+//! event of the partition in `(ε, max_t]`, with a finite point and normal;
+//! `segments_into` gives the partition's segments and `first_interface` its
+//! first interface.
 #![no_main]
 
 use complex::{Block, BlockId, Complex, ComplexError, ComplexOptions, MaterialKey, Opacity, Partition};
@@ -179,6 +181,18 @@ fuzz_target!(|input: ComplexInput| {
         let partition = check_partition(&c, &ray, &sets);
         check_cast(&c, &ray, cast.max_t.value(), &partition, accurate);
         check_cast(&c, &ray, f64::INFINITY, &partition, accurate);
+
+        // The partition's segments alone (shadow rays), and its first
+        // interface formed from a bounded partition (camera rays).
+        let mut scratch = Partition::default();
+        c.segments_into(&ray, &mut scratch);
+        assert_eq!(scratch.segments, partition.segments, "segments_into against the partition");
+        assert!(scratch.events.is_empty(), "segments_into left events: {scratch:?}");
+        let first = c.first_interface(&ray, &mut scratch);
+        if accurate && ray.origin().coords.amax() <= FAR {
+            let want = partition.events.iter().find(|e| e.t > c.epsilon() && !e.same_medium);
+            assert_eq!(first.as_ref(), want, "first_interface against the partition {partition:?}");
+        }
 
         // Points along the ray: in each set's intervals and at every segment's middle.
         for (_, set) in &sets {
