@@ -21,6 +21,9 @@ use crate::Aabb;
 const LEAF_SIZE: usize = 1;
 /// Number of centroid bins per axis for the SAH.
 const BINS: usize = 16;
+/// Subtrees of at least this many blocks build their two halves in
+/// parallel (see `Binary::build_node`).
+const PARALLEL_FROM: usize = 4096;
 /// Depth limit of the binary build; the builder makes a leaf before a
 /// subtree could get deeper than this.
 pub(crate) const MAX_DEPTH: usize = 64;
@@ -178,6 +181,11 @@ impl RayBoxes {
 impl Bvh {
     /// Builds the hierarchy over `(index, box)` pairs; every box must be bounded.
     pub(crate) fn build(entries: &[(u32, Aabb)]) -> Self {
+        Self::build_with(entries, PARALLEL_FROM)
+    }
+
+    /// [`Bvh::build`], with subtrees of `parallel_from` blocks or more built on two threads.
+    fn build_with(entries: &[(u32, Aabb)], parallel_from: usize) -> Self {
         if entries.is_empty() {
             return Bvh::default();
         }
@@ -193,7 +201,7 @@ impl Bvh {
         let mut binary =
             Binary { nodes: Vec::with_capacity(2 * entries.len()), items: Vec::with_capacity(entries.len()) };
         binary.nodes.push(EMPTY_NODE);
-        binary.build_node(0, &mut work, 0);
+        binary.build_node(0, &mut work, 0, parallel_from);
         let mut bvh = Bvh { nodes: Vec::with_capacity(entries.len() / 2 + 1), items: binary.items };
         let root = &binary.nodes[0];
         if root.count > 0 {
@@ -390,8 +398,11 @@ struct Binary {
 }
 
 impl Binary {
-    /// Fills node `n` with `work`.
-    fn build_node(&mut self, n: usize, work: &mut [Entry], depth: usize) {
+    /// Fills node `n` with `work`; the two halves of a subtree of at least
+    /// `parallel_from` blocks are built on two threads (`rayon::join`), each
+    /// into a tree of its own grafted in place after: the same nodes in the
+    /// same order as one thread builds.
+    fn build_node(&mut self, n: usize, work: &mut [Entry], depth: usize, parallel_from: usize) {
         let (min, max) = bounds_of(work);
         let split = if work.len() <= LEAF_SIZE || depth + 1 >= MAX_DEPTH { None } else { split(work, &min, &max) };
         let start = match split {
@@ -405,10 +416,37 @@ impl Binary {
         self.nodes[n] = Node { min, max, start, count: if split.is_some() { 0 } else { work.len() as u32 } };
         if let Some(mid) = split {
             self.nodes.extend([EMPTY_NODE; 2]);
+            let parallel = work.len() >= parallel_from;
             let (left, right) = work.split_at_mut(mid);
-            self.build_node(start as usize, left, depth + 1);
-            self.build_node(start as usize + 1, right, depth + 1);
+            if parallel {
+                let subtree = |work: &mut [Entry]| {
+                    let mut t = Binary { nodes: vec![EMPTY_NODE], items: Vec::with_capacity(work.len()) };
+                    t.build_node(0, work, depth + 1, parallel_from);
+                    t
+                };
+                let (l, r) = rayon::join(|| subtree(left), || subtree(right));
+                self.graft(start as usize, &l);
+                self.graft(start as usize + 1, &r);
+            } else {
+                self.build_node(start as usize, left, depth + 1, parallel_from);
+                self.build_node(start as usize + 1, right, depth + 1, parallel_from);
+            }
         }
+    }
+
+    /// Puts the tree `t` (root: its node 0) at node `n`, its other nodes and
+    /// its items after ours, where `build_node(n, ..)` would have put them.
+    fn graft(&mut self, n: usize, t: &Binary) {
+        // `t`'s node k >= 1 lands at `k - 1 + len`.
+        let node_shift = self.nodes.len() as u32 - 1;
+        let item_shift = self.items.len() as u32;
+        let moved = |mut node: Node| {
+            node.start += if node.count == 0 { node_shift } else { item_shift };
+            node
+        };
+        self.nodes[n] = moved(t.nodes[0]);
+        self.nodes.extend(t.nodes[1..].iter().map(|&k| moved(k)));
+        self.items.extend_from_slice(&t.items);
     }
 }
 
@@ -651,6 +689,41 @@ mod tests {
             let holds = |(lo, hi): &([f64; 3], [f64; 3])| (0..3).all(|i| lo[i] <= p[i] && p[i] <= hi[i]);
             let expected: Vec<u32> = (0..boxes.len() as u32).filter(|&i| holds(&boxes[i as usize])).collect();
             prop_assert_eq!(inside, expected);
+        }
+    }
+
+    /// The two-thread build gives the same tree as one thread, node for node.
+    #[test]
+    fn parallel_build_is_the_sequential_one() {
+        let mut rng = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            (rng >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let entries: Vec<(u32, Aabb)> = (0..6000)
+            .map(|i| {
+                let c = [next() * 100.0, next() * 100.0, next() * 100.0];
+                let r = 0.1 + next();
+                (
+                    i,
+                    Aabb {
+                        min: Point3::new(c[0] - r, c[1] - r, c[2] - r),
+                        max: Point3::new(c[0] + r, c[1] + r, c[2] + r),
+                    },
+                )
+            })
+            .collect();
+        let (one, two) = (Bvh::build_with(&entries, usize::MAX), Bvh::build_with(&entries, 64));
+        assert_eq!(one.items, two.items);
+        assert_eq!(one.nodes.len(), two.nodes.len());
+        for (a, b) in one.nodes.iter().zip(&two.nodes) {
+            assert_eq!((a.child, a.count), (b.child, b.count));
+            for i in 0..3 {
+                assert_eq!(a.min[i].to_array(), b.min[i].to_array());
+                assert_eq!(a.max[i].to_array(), b.max[i].to_array());
+            }
         }
     }
 }
