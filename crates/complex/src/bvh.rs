@@ -26,7 +26,7 @@ const BINS: usize = 16;
 const PARALLEL_FROM: usize = 4096;
 /// Depth limit of the binary build; the builder makes a leaf before a
 /// subtree could get deeper than this.
-pub(crate) const MAX_DEPTH: usize = 64;
+const MAX_DEPTH: usize = 64;
 /// Traversal stack size: the four-wide tree is at most `MAX_DEPTH / 2` deep
 /// (see [`Bvh::collapse`]), and a step pops one entry and pushes at most
 /// four, so the stack holds at most `3 · depth + 1` entries.
