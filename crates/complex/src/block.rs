@@ -160,18 +160,36 @@ impl Block {
     }
 
     /// [`Block::intervals`] without building a set for a convex block.
-    #[inline]
     pub(crate) fn spans(&self, ray: &Ray) -> Spans {
+        let mut spans = Spans::Empty;
+        self.spans_into(ray, &mut spans);
+        spans
+    }
+
+    /// [`Block::spans`] written into `out`: a convex block writes at most
+    /// one interval, and only the general case a whole set. (Returning the
+    /// enum instead costs a copy of its full 272 bytes wherever it is
+    /// passed on, whatever the variant.)
+    #[inline(always)]
+    pub(crate) fn spans_into(&self, ray: &Ray, out: &mut Spans) {
         if self.convex {
             let solids = self.solids.iter().map(|s| match s {
                 Solid::HalfSpace(h) => SolidRef::HalfSpace(h),
                 Solid::Quadric(q) => SolidRef::Quadric(q),
             });
             if let Some(spans) = convex_spans(ray, solids, self.precision) {
-                return spans;
+                *out = spans;
+                return;
             }
         }
-        self.spans_general(ray)
+        self.spans_general_into(ray, out);
+    }
+
+    /// `*out = self.spans_general(ray)`, out of line: the rare case.
+    #[cold]
+    #[inline(never)]
+    pub(crate) fn spans_general_into(&self, ray: &Ray, out: &mut Spans) {
+        *out = self.spans_general(ray);
     }
 
     /// The precision mode its sets are computed in.

@@ -275,21 +275,30 @@ impl Complex {
         if self.boxes[id.index()].is_empty() {
             return IntervalSet::empty();
         }
-        self.block_spans(id.0, ray, &RayBoxes::new(ray)).set()
+        let mut scratch = Spans::Empty;
+        self.block_spans(id.0, ray, &RayBoxes::new(ray), &mut scratch);
+        scratch.set()
     }
 
-    /// The spans of the block in BVH slot `k`, clipped to its box: the one
-    /// place every query of a bounded block reads its intervals from.
+    /// The intervals of the block in BVH slot `k`, clipped to its box: the
+    /// one place every query of a bounded block reads its intervals from.
+    /// They are written into `scratch` (one per query, reused for every
+    /// block) and read from there: a [`Spans`] value passed on by value is a
+    /// 272-byte copy, whatever its variant.
     #[inline(always)]
-    fn slot_spans(&self, k: u32, ray: &Ray, rb: &RayBoxes) -> Spans {
-        let i = self.kernel.block(k);
-        self.clip_to_box(i, self.kernel.spans(k, ray, &self.blocks), ray, rb)
+    fn slot_spans<'s>(&self, k: u32, ray: &Ray, rb: &RayBoxes, scratch: &'s mut Spans) -> &'s [Interval] {
+        self.kernel.spans_into(k, ray, &self.blocks, scratch);
+        self.clip_to_box(self.kernel.block(k), scratch, ray, rb);
+        scratch.as_slice()
     }
 
-    /// The spans of block `i`, clipped to its box (for unbounded blocks).
+    /// The intervals of block `i`, clipped to its box (for unbounded
+    /// blocks), like [`Complex::slot_spans`].
     #[inline]
-    fn block_spans(&self, i: u32, ray: &Ray, rb: &RayBoxes) -> Spans {
-        self.clip_to_box(i, self.blocks[i as usize].spans(ray), ray, rb)
+    fn block_spans<'s>(&self, i: u32, ray: &Ray, rb: &RayBoxes, scratch: &'s mut Spans) -> &'s [Interval] {
+        self.blocks[i as usize].spans_into(ray, scratch);
+        self.clip_to_box(i, scratch, ray, rb);
+        scratch.as_slice()
     }
 
     /// `spans` within the range `[lo, hi]` where the ray is in block `i`'s
@@ -298,15 +307,15 @@ impl Complex {
     /// `cast_ray` see the same sets. The common case (nothing outside) is two
     /// comparisons after the slab test.
     #[inline(always)]
-    fn clip_to_box(&self, i: u32, spans: Spans, ray: &Ray, rb: &RayBoxes) -> Spans {
+    fn clip_to_box(&self, i: u32, spans: &mut Spans, ray: &Ray, rb: &RayBoxes) {
         let s = spans.as_slice();
-        let (Some(first), Some(last)) = (s.first(), s.last()) else { return spans };
+        let (Some(first), Some(last)) = (s.first(), s.last()) else { return };
         let b = &self.boxes[i as usize];
         let (lo, hi) = rb.range(&b.min.coords.into(), &b.max.coords.into());
         if first.enter.t >= lo && last.exit.t <= hi {
-            return spans;
+            return;
         }
-        self.clip_spans(i, &spans, lo, hi, ray)
+        self.clip_spans(i, spans, lo, hi, ray);
     }
 
     /// The cold part of [`Complex::clip_to_box`]: an end moved to `lo` or
@@ -315,7 +324,7 @@ impl Complex {
     /// there (the box face is near that solid's surface), else solid 0.
     #[cold]
     #[inline(never)]
-    fn clip_spans(&self, i: u32, spans: &Spans, lo: f64, hi: f64, ray: &Ray) -> Spans {
+    fn clip_spans(&self, i: u32, spans: &mut Spans, lo: f64, hi: f64, ray: &Ray) {
         let solids = self.blocks[i as usize].solids();
         let tag = |b: Bound, t: f64| {
             let x = ray.at(t);
@@ -332,12 +341,12 @@ impl Complex {
                 n += 1;
             }
         }
-        match &out[..n] {
+        *spans = match &out[..n] {
             [] => Spans::Empty,
             [iv] => Spans::One(*iv),
             // At most as many intervals as the block had: within capacity.
             many => Spans::Many(IntervalSet::from_intervals(many.iter().copied()).unwrap_or_default()),
-        }
+        };
     }
 
     /// The interval set of each block the ray meets, with intervals inside
@@ -353,17 +362,17 @@ impl Complex {
     fn collect_sets(&self, ray: &Ray, max_t: f64, out: &mut Sets) {
         out.clear();
         let eps = self.epsilon;
-        let mut push = |i: u32, spans: &Spans| {
-            out.push(BlockId(i), spans.as_slice(), eps, false);
+        let mut push = |i: u32, spans: &[Interval]| {
+            out.push(BlockId(i), spans, eps, false);
         };
         let rb = RayBoxes::new(ray);
         let mut t_max = max_t;
+        let mut scratch = Spans::Empty;
         self.bvh.traverse_any(&rb, 0.0, &mut t_max, |k, _, _| {
-            let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
-            push(i, &sp)
+            push(self.kernel.block(k), self.slot_spans(k, ray, &rb, &mut scratch))
         });
         for i in self.unbounded_crossed(&rb, 0.0, max_t) {
-            push(i, &self.block_spans(i, ray, &rb));
+            push(i, self.block_spans(i, ray, &rb, &mut scratch));
         }
         out.sort();
     }
@@ -451,8 +460,8 @@ impl Complex {
         // `t_max = ε` keeps just the boxes that hold the ray at ε.
         let mut run_end = eps;
         let mut found = false;
-        let mut look = |spans: &Spans, t_max: &mut f64| {
-            for iv in spans.as_slice() {
+        let mut look = |spans: &[Interval], t_max: &mut f64| {
+            for iv in spans {
                 if iv.enter.t <= eps {
                     if eps < iv.exit.t {
                         run_end = run_end.max(iv.exit.t);
@@ -464,10 +473,12 @@ impl Complex {
             }
         };
         let mut t_max = max_t;
+        let mut scratch = Spans::Empty;
         for i in self.unbounded_crossed(&rb, eps, max_t) {
-            look(&self.block_spans(i, ray, &rb), &mut t_max);
+            look(self.block_spans(i, ray, &rb, &mut scratch), &mut t_max);
         }
-        self.bvh.traverse_any(&rb, eps, &mut t_max, |k, _, t_max| look(&self.slot_spans(k, ray, &rb), t_max));
+        self.bvh
+            .traverse_any(&rb, eps, &mut t_max, |k, _, t_max| look(self.slot_spans(k, ray, &rb, &mut scratch), t_max));
         if run_end > eps {
             return self.run_exit(ray, &rb, run_end, max_t).is_some();
         }
@@ -502,19 +513,19 @@ impl Complex {
     /// `enter <= t < exit`, by the priority rule.
     fn owner_after(&self, ray: &Ray, rb: &RayBoxes, t: f64) -> Option<BlockId> {
         let (mut opaque, mut transparent) = (u32::MAX, u32::MAX);
-        let mut consider = |i: u32, spans: &Spans| {
+        let mut consider = |i: u32, spans: &[Interval]| {
             let best = if self.blocks[i as usize].is_transparent() { &mut transparent } else { &mut opaque };
-            if i < *best && spans.as_slice().iter().any(|iv| iv.enter.t <= t && t < iv.exit.t) {
+            if i < *best && spans.iter().any(|iv| iv.enter.t <= t && t < iv.exit.t) {
                 *best = i;
             }
         };
         let mut t_hi = t;
+        let mut scratch = Spans::Empty;
         self.bvh.traverse_any(rb, t, &mut t_hi, |k, _, _| {
-            let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, rb));
-            consider(i, &sp)
+            consider(self.kernel.block(k), self.slot_spans(k, ray, rb, &mut scratch))
         });
         for i in self.unbounded_crossed(rb, t, t) {
-            consider(i, &self.block_spans(i, ray, rb));
+            consider(i, self.block_spans(i, ray, rb, &mut scratch));
         }
         [opaque, transparent].into_iter().find(|&i| i != u32::MAX).map(BlockId)
     }
@@ -522,8 +533,8 @@ impl Complex {
     /// The smallest finite end of any block's interval in `(tau, max_t]`.
     fn next_end(&self, ray: &Ray, rb: &RayBoxes, tau: f64, max_t: f64) -> Option<f64> {
         let mut best: Option<f64> = None;
-        let mut consider = |_: u32, spans: &Spans, t_max: &mut f64| {
-            for iv in spans.as_slice() {
+        let mut consider = |spans: &[Interval], t_max: &mut f64| {
+            for iv in spans {
                 for e in [iv.enter.t, iv.exit.t] {
                     if e > tau && e <= *t_max && e.is_finite() && best.map_or(true, |b| e < b) {
                         best = Some(e);
@@ -533,13 +544,12 @@ impl Complex {
             }
         };
         let mut t_max = max_t;
+        let mut scratch = Spans::Empty;
         for i in self.unbounded_crossed(rb, tau, max_t) {
-            consider(i, &self.block_spans(i, ray, rb), &mut t_max);
+            consider(self.block_spans(i, ray, rb, &mut scratch), &mut t_max);
         }
-        self.bvh.traverse(rb, tau, &mut t_max, |k, _, t_max| {
-            let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, rb));
-            consider(i, &sp, t_max)
-        });
+        self.bvh
+            .traverse(rb, tau, &mut t_max, |k, _, t_max| consider(self.slot_spans(k, ray, rb, &mut scratch), t_max));
         best
     }
 
@@ -566,14 +576,16 @@ impl Complex {
         after: Option<BlockId>,
     ) -> Option<Hit> {
         let entry = after.and_then(|id| {
-            let set = self.block_spans(id.0, ray, rb);
-            let solid = set.as_slice().iter().find(|iv| iv.enter.t == t)?.enter.solid()?;
+            let mut scratch = Spans::Empty;
+            let set = self.block_spans(id.0, ray, rb, &mut scratch);
+            let solid = set.iter().find(|iv| iv.enter.t == t)?.enter.solid()?;
             Some(self.hit(ray, t, id.0, solid, true))
         });
         entry.or_else(|| {
             let id = before?;
-            let set = self.block_spans(id.0, ray, rb);
-            let solid = set.as_slice().iter().find(|iv| iv.exit.t == t)?.exit.solid()?;
+            let mut scratch = Spans::Empty;
+            let set = self.block_spans(id.0, ray, rb, &mut scratch);
+            let solid = set.iter().find(|iv| iv.exit.t == t)?.exit.solid()?;
             Some(self.hit(ray, t, id.0, solid, false))
         })
     }
@@ -591,9 +603,9 @@ impl Complex {
         let mut run_end = eps;
         // `(t, block, solid, BVH slot)`.
         let mut best: Option<(f64, u32, u32, Option<u32>)> = None;
-        let mut consider = |i: u32, k: Option<u32>, spans: &Spans, t_max: &mut f64| {
+        let mut consider = |i: u32, k: Option<u32>, spans: &[Interval], t_max: &mut f64| {
             let mut entry = None;
-            for iv in spans.as_slice() {
+            for iv in spans {
                 if iv.enter.t <= eps {
                     if eps < iv.exit.t {
                         run_end = run_end.max(iv.exit.t);
@@ -611,12 +623,12 @@ impl Complex {
             }
         };
         let mut t_max = max_t;
+        let mut scratch = Spans::Empty;
         for i in self.unbounded_crossed(&rb, eps, max_t) {
-            consider(i, None, &self.block_spans(i, ray, &rb), &mut t_max);
+            consider(i, None, self.block_spans(i, ray, &rb, &mut scratch), &mut t_max);
         }
         self.bvh.traverse(&rb, eps, &mut t_max, |k, _, t_max| {
-            let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, &rb));
-            consider(i, Some(k), &sp, t_max)
+            consider(self.kernel.block(k), Some(k), self.slot_spans(k, ray, &rb, &mut scratch), t_max)
         });
         if run_end > eps {
             return self.run_exit(ray, &rb, run_end, max_t);
@@ -645,8 +657,8 @@ impl Complex {
             // The lowest block id whose interval ends exactly at `next`: the
             // owner just before the exit.
             let mut owner: Option<(u32, u32)> = None;
-            let mut extend = |i: u32, spans: &Spans| {
-                for iv in spans.as_slice() {
+            let mut extend = |i: u32, spans: &[Interval]| {
+                for iv in spans {
                     if iv.enter.t <= run_end && iv.exit.t >= next {
                         if iv.exit.t > next {
                             next = iv.exit.t;
@@ -659,12 +671,12 @@ impl Complex {
                 }
             };
             let mut t_hi = run_end;
+            let mut scratch = Spans::Empty;
             self.bvh.traverse_any(rb, self.epsilon, &mut t_hi, |k, _, _| {
-                let (i, sp) = (self.kernel.block(k), self.slot_spans(k, ray, rb));
-                extend(i, &sp)
+                extend(self.kernel.block(k), self.slot_spans(k, ray, rb, &mut scratch))
             });
             for i in self.unbounded_crossed(rb, self.epsilon, run_end) {
-                extend(i, &self.block_spans(i, ray, rb));
+                extend(i, self.block_spans(i, ray, rb, &mut scratch));
             }
             if next > run_end {
                 if next > max_t {
@@ -816,17 +828,18 @@ impl Complex {
         let known = |i: u32| previous.and_then(|p| p.get(BlockId(i)));
         let rb = RayBoxes::new(ray);
         let mut t_max = f64::INFINITY;
+        let mut scratch = Spans::Empty;
         for i in self.unbounded_crossed(&rb, 0.0, f64::INFINITY) {
             match known(i) {
                 Some(ivs) => push(i, ivs, &mut t_max),
-                None => push(i, self.block_spans(i, ray, &rb).as_slice(), &mut t_max),
+                None => push(i, self.block_spans(i, ray, &rb, &mut scratch), &mut t_max),
             }
         }
         self.bvh.traverse(&rb, 0.0, &mut t_max, |k, _, t_max| {
             let i = self.kernel.block(k);
             match known(i) {
                 Some(ivs) => push(i, ivs, t_max),
-                None => push(i, self.slot_spans(k, ray, &rb).as_slice(), t_max),
+                None => push(i, self.slot_spans(k, ray, &rb, &mut scratch), t_max),
             }
         });
         out.sort();

@@ -91,12 +91,12 @@ impl Kernel {
         })
     }
 
-    /// The intervals along the ray of the block in slot `k`: exactly
-    /// [`Block::spans`], read from the packed solids. (Returned alone, not
-    /// with the block, so that the caller's copy is the return slot: a
-    /// tuple costs a 272-byte copy per block.)
-    #[inline]
-    pub(crate) fn spans(&self, k: u32, ray: &Ray, blocks: &[Block]) -> Spans {
+    /// The intervals along the ray of the block in slot `k`, written into
+    /// `out`: exactly [`Block::spans`], read from the packed solids. (Written
+    /// in place, like [`Block::spans_into`]: a convex block writes at most
+    /// one interval, not a 272-byte enum.)
+    #[inline(always)]
+    pub(crate) fn spans_into(&self, k: u32, ray: &Ray, blocks: &[Block], out: &mut Spans) {
         let slot = self.slots[k as usize];
         if slot.count > 0 {
             let (mut h, mut q) = (slot.half_space as usize, slot.quadric as usize);
@@ -110,10 +110,11 @@ impl Kernel {
                 }
             });
             if let Some(spans) = convex_spans(ray, solids, self.precision) {
-                return spans;
+                *out = spans;
+                return;
             }
         }
-        blocks[slot.block as usize].spans_general(ray)
+        blocks[slot.block as usize].spans_general_into(ray, out);
     }
 }
 
@@ -145,7 +146,8 @@ mod tests {
                 for k in 0..order.len() as u32 {
                     let id = kernel.block(k);
                     prop_assert_eq!(id, order[k as usize]);
-                    let packed = kernel.spans(k, ray, &blocks);
+                    let mut packed = Spans::Empty;
+                    kernel.spans_into(k, ray, &blocks, &mut packed);
                     let plain = blocks[id as usize].spans(ray);
                     prop_assert_eq!(packed.as_slice(), plain.as_slice());
                 }
