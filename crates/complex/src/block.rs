@@ -437,7 +437,7 @@ pub(crate) fn convex_spans<'a>(
     for (i, s) in solids.enumerate() {
         let (e, x) = match s {
             SolidRef::HalfSpace(h) => h.interval_with(ray, i as u32, precision),
-            SolidRef::Quadric(q) => match *q.intervals_with(ray, i as u32, precision).as_slice() {
+            SolidRef::Quadric(q) => match *q.pieces_with(ray, i as u32, precision).as_slice() {
                 [] => return Some(Spans::Empty),
                 [iv] => (iv.enter, iv.exit),
                 _ => return None,

@@ -366,3 +366,101 @@ impl<'a> IntoIterator for &'a IntervalSet {
         self.iter()
     }
 }
+
+/// The set of one solid along a ray, at most two intervals: the inside of a
+/// quadric is one interval, or two where the ray leaves and re-enters (the
+/// two nappes of a cone, a hyperboloid of two sheets, the outside of a
+/// cylinder's complement). The same sets as [`IntervalSet`] without its
+/// fixed buffer of [`IntervalSet::CAPACITY`] intervals, which a kernel
+/// returning one set per solid and ray would fill and copy every time.
+///
+/// ```
+/// use quadric::{Bound, IntervalSet, Pieces};
+/// let one = Pieces::from_interval(Bound::new(1.0, 0), Bound::new(4.0, 0));
+/// assert_eq!(one.as_slice().len(), 1);
+/// assert_eq!(IntervalSet::from(one), IntervalSet::from_interval(Bound::new(1.0, 0), Bound::new(4.0, 0)));
+/// assert!(Pieces::from_interval(Bound::new(4.0, 0), Bound::new(1.0, 0)).as_slice().is_empty());
+/// ```
+#[derive(Clone, Copy)]
+pub struct Pieces {
+    len: u8,
+    items: [Interval; 2],
+}
+
+impl Pieces {
+    /// The empty set.
+    #[inline(always)]
+    pub const fn empty() -> Self {
+        Pieces { len: 0, items: [FILLER; 2] }
+    }
+
+    /// `[enter, exit]`, or the empty set if `enter.t >= exit.t` or either end
+    /// is NaN (as [`IntervalSet::from_interval`]).
+    #[inline(always)]
+    pub fn from_interval(enter: Bound, exit: Bound) -> Self {
+        if enter.t < exit.t {
+            Pieces { len: 1, items: [Interval::new(enter, exit), FILLER] }
+        } else {
+            Self::empty()
+        }
+    }
+
+    /// `self` followed by `later`, whose intervals start no earlier than
+    /// any of `self`'s: [`IntervalSet::union`] of the two (touching or
+    /// overlapping intervals merge, `self`'s end winning ties), or `None`
+    /// where that has more than two intervals.
+    #[inline]
+    pub(crate) fn then(self, later: Pieces) -> Option<Pieces> {
+        let mut out = self;
+        for &iv in later.as_slice() {
+            if let Some(last) = out.items[..out.len as usize].last_mut() {
+                if iv.enter.t <= last.exit.t {
+                    if iv.exit.t > last.exit.t {
+                        last.exit = iv.exit;
+                    }
+                    continue;
+                }
+            }
+            if out.len == 2 {
+                return None;
+            }
+            out.items[out.len as usize] = iv;
+            out.len += 1;
+        }
+        Some(out)
+    }
+
+    /// The intervals, sorted.
+    #[inline(always)]
+    pub fn as_slice(&self) -> &[Interval] {
+        &self.items[..self.len as usize]
+    }
+}
+
+impl From<Pieces> for IntervalSet {
+    #[inline]
+    fn from(p: Pieces) -> Self {
+        let mut set = IntervalSet::empty();
+        set.items[..p.len as usize].copy_from_slice(p.as_slice());
+        set.len = p.len;
+        set
+    }
+}
+
+impl Default for Pieces {
+    fn default() -> Self {
+        Self::empty()
+    }
+}
+
+impl PartialEq for Pieces {
+    fn eq(&self, other: &Self) -> bool {
+        self.as_slice() == other.as_slice()
+    }
+}
+
+impl fmt::Debug for Pieces {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_list().entries(self.as_slice().iter().map(|iv| (iv.enter.t, iv.exit.t))).finish()
+    }
+}

@@ -36,7 +36,7 @@ mod transform;
 
 pub use error::GeometryError;
 pub use halfspace::HalfSpace;
-pub use interval::{Bound, CapacityError, Interval, IntervalSet, NO_SOLID};
+pub use interval::{Bound, CapacityError, Interval, IntervalSet, Pieces, NO_SOLID};
 pub use nalgebra;
 pub use quadric::precision::{CertifiedIntervals, CertifiedRoot, Precision};
 pub use quadric::Quadric;

@@ -6,7 +6,7 @@ use nalgebra::{Matrix3, Point3, Vector3};
 
 use super::{from, linear_set, quadratic_set, up_to, whole_ray, Quadric};
 use crate::exact::{Exact, ExactRoot};
-use crate::interval::{Bound, IntervalSet};
+use crate::interval::{Bound, IntervalSet, Pieces};
 use crate::roots::{difference_of_products, two_sum_error};
 use crate::{HalfSpace, Ray, Solid};
 
@@ -58,11 +58,20 @@ pub struct CertifiedIntervals {
 }
 
 impl CertifiedIntervals {
-    fn new(set: IntervalSet, roots: &[CertifiedRoot], settled_exactly: bool) -> Self {
+    fn new(set: Pieces, roots: &[CertifiedRoot], settled_exactly: bool) -> Self {
         let mut r = [CertifiedRoot { t: 0.0, error: 0.0 }; 2];
         let count = roots.len().min(2);
         r[..count].copy_from_slice(&roots[..count]);
-        CertifiedIntervals { set, roots: r, count, settled_exactly }
+        CertifiedIntervals { set: set.into(), roots: r, count, settled_exactly }
+    }
+
+    /// The set as [`Pieces`]: a solid's certified set has at most two
+    /// intervals, since it is built as pieces (checked in debug builds).
+    fn pieces(&self) -> Pieces {
+        let s = self.set.as_slice();
+        debug_assert!(s.len() <= 2, "a solid's certified set {} has more than two intervals", self.set);
+        let piece = |k: usize| s.get(k).map_or_else(Pieces::empty, |iv| Pieces::from_interval(iv.enter, iv.exit));
+        piece(0).then(piece(1)).unwrap_or_else(|| piece(0))
     }
 
     /// The same answer with the values of `other` (a set of the same
@@ -128,15 +137,27 @@ impl Quadric {
     #[inline]
     pub fn intervals_with(&self, ray: &Ray, solid: u32, precision: Precision) -> IntervalSet {
         match precision {
+            Precision::Accurate => self.intervals_accurate(ray, solid).into(),
+            Precision::Fast => self.intervals_fast(ray, solid).into(),
+            Precision::Certified => self.intervals_certified(ray, solid).set,
+        }
+    }
+
+    /// [`Quadric::intervals_with`] as [`Pieces`]: the same intervals
+    /// without an [`IntervalSet`]'s buffer, for a caller that reads one
+    /// solid's set and moves on (the ray kernels of a block).
+    #[inline]
+    pub fn pieces_with(&self, ray: &Ray, solid: u32, precision: Precision) -> Pieces {
+        match precision {
             Precision::Accurate => self.intervals_accurate(ray, solid),
             Precision::Fast => self.intervals_fast(ray, solid),
-            Precision::Certified => self.intervals_certified(ray, solid).set,
+            Precision::Certified => self.intervals_certified(ray, solid).pieces(),
         }
     }
 
     /// [`Precision::Fast`]: everything from the ray's origin, as written.
     #[inline(never)]
-    fn intervals_fast(&self, ray: &Ray, solid: u32) -> IntervalSet {
+    fn intervals_fast(&self, ray: &Ray, solid: u32) -> Pieces {
         let (p, r) = (ray.origin().coords, ray.direction());
         let d = p - self.centre;
         let ar = self.a * r;
@@ -169,7 +190,7 @@ impl Quadric {
         if certified.settled_exactly {
             return certified;
         }
-        certified.with_values_of(&self.intervals_accurate(ray, solid))
+        certified.with_values_of(&self.intervals_accurate(ray, solid).into())
     }
 }
 
@@ -475,7 +496,7 @@ impl Parts {
     /// decision open, [`Parts::settle`] decides it exactly.
     fn certified(&self, ray: &Ray, solid: u32) -> CertifiedIntervals {
         if !self.finite(ray) {
-            return CertifiedIntervals::new(IntervalSet::empty(), &[], false);
+            return CertifiedIntervals::new(Pieces::empty(), &[], false);
         }
         let (p, r) = (ray.origin().coords, ray.direction());
         let abs_a = self.a.abs();
@@ -544,7 +565,7 @@ impl Parts {
             return self.settle(ray, solid);
         }
         if disc < 0.0 {
-            let set = if s > 0.0 { IntervalSet::empty() } else { whole_ray() };
+            let set = if s > 0.0 { Pieces::empty() } else { whole_ray() };
             return CertifiedIntervals::new(set, &[], false);
         }
         // √D: |√D* - √D̂| <= e_D / (√D̂ + √(D̂ - e_D)) <= e_D/√D̂, plus the
@@ -620,7 +641,7 @@ impl Parts {
         let set = match exact.s.signum() {
             0 => match exact.t.signum() {
                 0 if exact.u.signum() <= 0 => whole_ray(),
-                0 => IntervalSet::empty(),
+                0 => Pieces::empty(),
                 sign => {
                     let l = clip(&roots[0], rounded[0].t);
                     if sign > 0 {
@@ -634,7 +655,7 @@ impl Parts {
                 // No crossing, or a touching point (dropped: sets are regularised).
                 0 | 1 => {
                     if sign > 0 {
-                        IntervalSet::empty()
+                        Pieces::empty()
                     } else {
                         whole_ray()
                     }
@@ -662,15 +683,15 @@ impl Parts {
 /// The set `{λ >= 0 : inside}` for two crossings `l1 < l2` of the line (an
 /// end at `-∞` stands for a crossing behind the origin): `[l1, l2]` for
 /// `s > 0`, `(-∞, l1] ∪ [l2, ∞)` for `s < 0`, clipped to the ray.
-fn quadratic_pieces(positive: bool, l1: f64, l2: f64, solid: u32) -> IntervalSet {
+fn quadratic_pieces(positive: bool, l1: f64, l2: f64, solid: u32) -> Pieces {
     if positive {
         if l2 <= 0.0 {
-            return IntervalSet::empty();
+            return Pieces::empty();
         }
         let enter = if l1 >= 0.0 { Bound::new(l1 + 0.0, solid) } else { Bound::free(0.0) };
-        IntervalSet::from_interval(enter, Bound::new(l2 + 0.0, solid))
+        Pieces::from_interval(enter, Bound::new(l2 + 0.0, solid))
     } else if l1 > 0.0 {
-        up_to(l1, solid).union(&from(l2, solid)).unwrap_or_else(|_| whole_ray())
+        up_to(l1, solid).then(from(l2, solid)).unwrap_or_else(whole_ray)
     } else {
         from(l2, solid)
     }

@@ -2,7 +2,7 @@
 
 use nalgebra::{Matrix3, Matrix4, Point3, Vector3};
 
-use crate::interval::{Bound, IntervalSet};
+use crate::interval::{Bound, IntervalSet, Pieces};
 use crate::roots::{
     difference_of_products, dot2, exact_sign_of_sum, stable_roots, two_product, two_sum, two_sum_error,
 };
@@ -362,7 +362,7 @@ impl Quadric {
     }
 
     /// The kernel of [`Precision::Accurate`] (see [`Quadric::intervals`]).
-    fn intervals_accurate(&self, ray: &Ray, solid: u32) -> IntervalSet {
+    fn intervals_accurate(&self, ray: &Ray, solid: u32) -> Pieces {
         let (p, r) = (ray.origin().coords, ray.direction());
         let d = p - self.centre;
         // The foot of the perpendicular from the centre, `λ₀ = -r·d`. Any `λ₀`
@@ -450,7 +450,7 @@ impl Quadric {
         (lambda0, s, t): (f64, f64, f64),
         (g, ar): (&Vector3<f64>, &Vector3<f64>),
         solid: u32,
-    ) -> Option<IntervalSet> {
+    ) -> Option<Pieces> {
         let mu = -t / s;
         let lambda1 = lambda0 + mu;
         let g_apex = Vector3::new(mu.mul_add(ar.x, g.x), mu.mul_add(ar.y, g.y), mu.mul_add(ar.z, g.z));
@@ -541,39 +541,39 @@ fn pow2(e: i32) -> f64 {
 }
 
 // The sets below are built already clipped to the ray, `λ >= 0`, in one
-// construction: an `IntervalSet` is a few hundred bytes, and building it
-// whole and then clipping it copies it twice. They agree with
+// construction, as `Pieces` (an `IntervalSet` is a few hundred bytes, and
+// building it whole and then clipping it copies it twice). They agree with
 // `set.clip(0.0, ∞)` of the unclipped set: a clipped end is free at `+0.0`, a
 // root at exactly zero keeps its solid, and no end is `-0.0` (`x + 0.0`).
 
 /// The whole ray, `[0, ∞)`.
 #[inline(always)]
-fn whole_ray() -> IntervalSet {
-    IntervalSet::from_interval(Bound::free(0.0), Bound::free(f64::INFINITY))
+fn whole_ray() -> Pieces {
+    Pieces::from_interval(Bound::free(0.0), Bound::free(f64::INFINITY))
 }
 
 /// `(-∞, root] ∩ [0, ∞)`.
 #[inline(always)]
-fn up_to(root: f64, solid: u32) -> IntervalSet {
-    IntervalSet::from_interval(Bound::free(0.0), Bound::new(root + 0.0, solid))
+fn up_to(root: f64, solid: u32) -> Pieces {
+    Pieces::from_interval(Bound::free(0.0), Bound::new(root + 0.0, solid))
 }
 
 /// `[root, ∞) ∩ [0, ∞)`.
 #[inline(always)]
-fn from(root: f64, solid: u32) -> IntervalSet {
+fn from(root: f64, solid: u32) -> Pieces {
     let enter = if root >= 0.0 { Bound::new(root + 0.0, solid) } else { Bound::free(0.0) };
-    IntervalSet::from_interval(enter, Bound::free(f64::INFINITY))
+    Pieces::from_interval(enter, Bound::free(f64::INFINITY))
 }
 
 /// `{λ >= 0 : 2tλ + u <= 0}` (the `s = 0` rows of the table), for the ray
 /// re-based at `lambda0`.
 #[inline(always)]
-fn linear_set(t: f64, u: f64, lambda0: f64, solid: u32) -> IntervalSet {
+fn linear_set(t: f64, u: f64, lambda0: f64, solid: u32) -> Pieces {
     if !(t.is_finite() && u.is_finite()) {
-        return IntervalSet::empty();
+        return Pieces::empty();
     }
     if t == 0.0 {
-        return if u <= 0.0 { whole_ray() } else { IntervalSet::empty() };
+        return if u <= 0.0 { whole_ray() } else { Pieces::empty() };
     }
     let root = lambda0 + -u / (2.0 * t);
     if t > 0.0 {
@@ -586,28 +586,28 @@ fn linear_set(t: f64, u: f64, lambda0: f64, solid: u32) -> IntervalSet {
 /// `{λ >= 0 : sλ² + 2tλ + u <= 0}` for `s != 0`, for the ray re-based at
 /// `lambda0`.
 #[inline(always)]
-fn quadratic_set(s: f64, t: f64, u: f64, disc: f64, lambda0: f64, solid: u32) -> IntervalSet {
+fn quadratic_set(s: f64, t: f64, u: f64, disc: f64, lambda0: f64, solid: u32) -> Pieces {
     if !(disc.is_finite() && lambda0.is_finite()) {
-        return IntervalSet::empty();
+        return Pieces::empty();
     }
     if disc < 0.0 {
-        return if s > 0.0 { IntervalSet::empty() } else { whole_ray() };
+        return if s > 0.0 { Pieces::empty() } else { whole_ray() };
     }
     let (r1, r2) = stable_roots(s, t, u, disc);
     let (l1, l2) = (lambda0 + r1, lambda0 + r2);
     if s > 0.0 {
         let enter = if l1 >= 0.0 { Bound::new(l1 + 0.0, solid) } else { Bound::free(0.0) };
-        IntervalSet::from_interval(enter, Bound::new(l2 + 0.0, solid))
+        Pieces::from_interval(enter, Bound::new(l2 + 0.0, solid))
     } else if l1 < l2 && l1 > 0.0 {
         // Two disjoint pieces, `[0, l1]` and `[l2, ∞)`: within capacity.
-        up_to(l1, solid).union(&from(l2, solid)).unwrap_or_else(|_| whole_ray())
+        up_to(l1, solid).then(from(l2, solid)).unwrap_or_else(whole_ray)
     } else if l1 < l2 {
         from(l2, solid)
     } else if l1 == l2 {
         // The pieces touch (a tangent ray from outside): the whole line.
         whole_ray()
     } else {
-        IntervalSet::empty()
+        Pieces::empty()
     }
 }
 
@@ -636,6 +636,52 @@ mod tests {
                 for t in [iv.enter.t, iv.exit.t].into_iter().filter(|t| t.is_finite()) {
                     proptest::prop_assert_eq!(q.hit_point(&ray, t), full.hit_point(&ray, t));
                 }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        /// `pieces_with` is `intervals_with` without the set's buffer, in
+        /// every precision mode; the grid quadrics hit the tangent and
+        /// two-piece cases exactly.
+        #[test]
+        fn pieces_are_the_interval_set(
+            q in proptest::prop_oneof![crate::strategies::quadric(), crate::strategies::elementary_quadric()],
+            ray in proptest::prop_oneof![crate::strategies::ray(6.0), crate::strategies::grid_ray(3)],
+        ) {
+            for precision in [Precision::Fast, Precision::Accurate, Precision::Certified] {
+                let (pieces, set) = (q.pieces_with(&ray, 3, precision), q.intervals_with(&ray, 3, precision));
+                proptest::prop_assert_eq!(pieces.as_slice(), set.as_slice(), "{:?}", precision);
+                proptest::prop_assert_eq!(IntervalSet::from(pieces), set);
+            }
+        }
+
+        /// `Pieces::then` is the union of the two sets where the second
+        /// starts no earlier than the first.
+        #[test]
+        fn then_is_the_union(
+            a in (-4i32..4, 1i32..4),
+            b in proptest::collection::vec((0i32..4, 1i32..4), 0..=2),
+        ) {
+            let iv = |(lo, len): (i32, i32), solid: u32| (Bound::new(f64::from(lo), solid), Bound::new(f64::from(lo + len), solid));
+            let first = iv(a, 0);
+            let later: Vec<_> = b.iter().map(|&(gap, len)| iv((a.0 + gap, len), 1)).collect();
+            // `later` as pieces: sorted, disjoint (skipped where they are not).
+            let mut b_set = IntervalSet::empty();
+            let mut b_pieces = Pieces::empty();
+            for &(e, x) in &later {
+                if b_set.as_slice().last().is_some_and(|last| e.t <= last.exit.t) {
+                    return Ok(());
+                }
+                let one = IntervalSet::from_interval(e, x);
+                let (Ok(u), Some(p)) = (b_set.union(&one), b_pieces.then(Pieces::from_interval(e, x))) else { return Ok(()) };
+                (b_set, b_pieces) = (u, p);
+            }
+            proptest::prop_assert_eq!(b_pieces.as_slice(), b_set.as_slice());
+            let want = IntervalSet::from_interval(first.0, first.1).union(&b_set).expect("within capacity");
+            match Pieces::from_interval(first.0, first.1).then(b_pieces) {
+                Some(got) => proptest::prop_assert_eq!(got.as_slice(), want.as_slice()),
+                None => proptest::prop_assert!(want.len() > 2),
             }
         }
     }
