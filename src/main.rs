@@ -199,6 +199,7 @@ fn triple(v: &[f64]) -> [f64; 3] {
 fn run(command: Command) -> Result<(), Error> {
     match command {
         Command::Render { scene, output, png, size, threads, precision, samples, half, exposure } => {
+            render::frame::set_global_threads(threads)?;
             let cancel = interrupt_flag();
             if !exposure.is_finite() {
                 return Err(Error::Options(format!("--exposure must be a finite number of stops, got {exposure}")));
@@ -278,6 +279,7 @@ fn run(command: Command) -> Result<(), Error> {
             Ok(())
         }
         Command::Bench { scenes, size, threads, precision } => {
+            render::frame::set_global_threads(threads)?;
             println!(
                 "{:<28} {:>8} {:>9} {:>9} {:>9} {:>12} {:>12} {:>14} {:>14}",
                 "scene", "blocks", "load s", "size", "render s", "primary", "all rays", "primary/s", "all rays/s"

@@ -76,6 +76,38 @@ pub const MAX_PIXELS: u64 = 1 << 28;
 /// The most worker threads a render starts.
 pub const MAX_THREADS: usize = 1024;
 
+/// A pool builder for `threads` workers (default: one per core), the count
+/// checked.
+fn pool_builder(threads: Option<usize>) -> Result<rayon::ThreadPoolBuilder, Error> {
+    let builder = rayon::ThreadPoolBuilder::new();
+    let Some(n) = threads else { return Ok(builder) };
+    if n == 0 {
+        return Err(Error::Options("--threads must be at least 1".into()));
+    }
+    // The pool starts every thread at once; far more than any machine's
+    // cores only exhausts memory and process limits.
+    if n > MAX_THREADS {
+        return Err(Error::Options(format!("--threads must be at most {MAX_THREADS}, got {n}")));
+    }
+    Ok(builder.num_threads(n))
+}
+
+/// Sets the number of threads of rayon's global pool, which runs the work
+/// outside a render (loading: the block boxes, flattening, the BVH build),
+/// so that `--threads N` holds from the start; the render itself runs on a
+/// pool of its own ([`Options::threads`]). Call it once, before loading;
+/// `None` keeps rayon's default (one per core).
+///
+/// Errors on a count [`render`] would refuse (0, more than
+/// [`MAX_THREADS`]), and if the global pool was already started.
+pub fn set_global_threads(threads: Option<usize>) -> Result<(), Error> {
+    let builder = pool_builder(threads)?;
+    if threads.is_none() {
+        return Ok(());
+    }
+    builder.build_global().map_err(|e| Error::Options(format!("cannot start worker threads: {e}")))
+}
+
 /// Renders `world` with its camera. `progress` is called once per finished
 /// row (from worker threads).
 pub fn render(world: &World, options: Options, progress: &(dyn Fn() + Sync)) -> Result<(Frame, Stats), Error> {
@@ -97,19 +129,9 @@ pub fn render_until(
             "the image has {pixels} pixels; at most {MAX_PIXELS} are supported (about 16k x 16k)"
         )));
     }
-    let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(n) = options.threads {
-        if n == 0 {
-            return Err(Error::Options("--threads must be at least 1".into()));
-        }
-        // The pool starts every thread at once; far more than any machine's
-        // cores only exhausts memory and process limits.
-        if n > MAX_THREADS {
-            return Err(Error::Options(format!("--threads must be at most {MAX_THREADS}, got {n}")));
-        }
-        builder = builder.num_threads(n);
-    }
-    let pool = builder.build().map_err(|e| Error::Options(format!("cannot start worker threads: {e}")))?;
+    let pool = pool_builder(options.threads)?
+        .build()
+        .map_err(|e| Error::Options(format!("cannot start worker threads: {e}")))?;
     let start = Instant::now();
     // Rows are written in place: the frame is the only full-size buffer
     // (a collected list of rows would double the peak memory).
