@@ -95,7 +95,7 @@ impl RayBoxes {
         // 450 ulps of the origin, as `WIDEN_ABS` in `bounds.rs`.
         let pad = 1e-13 * o.coords.amax();
         let (o, d) = ([o.x, o.y, o.z], [d.x, d.y, d.z]);
-        let inv = d.map(|d| 1.0 / d);
+        let inv = quadric::lanes::recip(d);
         // `-o ∓ pad` is rounded once, by half an ulp of `o`: less than 1/900
         // of the pad, so the slabs hold the box grown by nearly all of it,
         // far beyond the kernel's few ulps. (Folding the product into an

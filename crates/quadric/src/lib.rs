@@ -25,6 +25,7 @@ mod error;
 mod exact;
 mod halfspace;
 mod interval;
+pub mod lanes;
 pub mod normal;
 mod quadric;
 mod ray;

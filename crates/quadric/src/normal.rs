@@ -23,8 +23,8 @@ pub fn unit(g: Vector3<f64>) -> Option<Vector3<f64>> {
     if m == 0.0 {
         return None;
     }
-    let g = g / m;
-    Some(g / g.norm())
+    let g = crate::lanes::div(&g, m);
+    Some(crate::lanes::div(&g, g.norm()))
 }
 
 /// `n` turned to face against the direction `r` of an incoming ray.

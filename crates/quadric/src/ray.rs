@@ -36,8 +36,8 @@ impl Ray {
         if m == 0.0 {
             return Err(GeometryError::ZeroDirection);
         }
-        let d = direction / m;
-        Ok(Ray { origin, direction: d / d.norm() })
+        let d = crate::lanes::div(&direction, m);
+        Ok(Ray { origin, direction: crate::lanes::div(&d, d.norm()) })
     }
 
     /// The ray origin `p`.
