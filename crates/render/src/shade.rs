@@ -184,7 +184,7 @@ impl<'w> Shader<'w> {
                 if dist.is_nan() || dist <= 0.0 {
                     continue;
                 }
-                let l = to_light / dist;
+                let l = quadric::lanes::div(&to_light, dist);
                 let nl = n.dot(&l);
                 if nl <= 0.0 {
                     continue;
@@ -201,7 +201,7 @@ impl<'w> Shader<'w> {
                             let h = l + v;
                             let hn = h.norm();
                             if hn > 0.0 {
-                                n.dot(&(h / hn))
+                                n.dot(&quadric::lanes::div(&h, hn))
                             } else {
                                 0.0
                             }
