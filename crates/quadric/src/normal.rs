@@ -23,8 +23,20 @@ pub fn unit(g: Vector3<f64>) -> Option<Vector3<f64>> {
     if m == 0.0 {
         return None;
     }
-    let g = crate::lanes::div(&g, m);
-    Some(crate::lanes::div(&g, g.norm()))
+    // Along an axis (two components exactly zero, the normal of most
+    // half-spaces): the divisions below give that axis exactly, `±1` and the
+    // two zeros with their signs.
+    if g.iter().filter(|c| **c == 0.0).count() == 2 {
+        return Some(g.map(|c| if c == 0.0 { c } else { c.signum() }));
+    }
+    Some(scaled(&g, m))
+}
+
+/// `g / |g|` by way of `g / m`, `m = max |gᵢ| > 0`.
+#[inline(always)]
+fn scaled(g: &Vector3<f64>, m: f64) -> Vector3<f64> {
+    let g = crate::lanes::div(g, m);
+    crate::lanes::div(&g, g.norm())
 }
 
 /// `n` turned to face against the direction `r` of an incoming ray.
@@ -34,5 +46,32 @@ pub fn facing(n: Vector3<f64>, r: &Vector3<f64>) -> Vector3<f64> {
         -n
     } else {
         n
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The axis shortcut is what the divisions give, bit for bit.
+        #[test]
+        fn axis_normals_are_the_divided_ones(
+            axis in 0usize..3,
+            c in prop_oneof![any::<f64>(), -1e3..1e3f64, Just(f64::MIN_POSITIVE / 7.0), Just(f64::MAX)],
+            zero_signs in any::<(bool, bool)>(),
+        ) {
+            prop_assume!(c.is_finite() && c != 0.0);
+            let zero = |negative: bool| if negative { -0.0 } else { 0.0 };
+            let mut g = Vector3::new(zero(zero_signs.0), zero(zero_signs.1), 0.0);
+            g[2] = g[axis];
+            g[axis] = c;
+            let got = unit(g).expect("a non-zero finite gradient");
+            let want = scaled(&g, g.amax());
+            for k in 0..3 {
+                prop_assert_eq!(got[k].to_bits(), want[k].to_bits(), "{:?}: {:?} against {:?}", g, got, want);
+            }
+        }
     }
 }
