@@ -150,8 +150,7 @@ pub fn render_until(
                 if cancel.load(Ordering::Relaxed) {
                     return 0;
                 }
-                let (row, rays) = render_row(world, i as u32);
-                out.copy_from_slice(&row);
+                let rays = render_row(world, i as u32, out);
                 progress();
                 rays
             })
@@ -165,13 +164,14 @@ pub fn render_until(
     Ok((frame, Stats { rays, elapsed }))
 }
 
-fn render_row(world: &World, i: u32) -> (Vec<Pixel>, u64) {
+/// Renders row `i` into `out` (one pixel per column), returning the rays cast.
+fn render_row(world: &World, i: u32, out: &mut [Pixel]) -> u64 {
     let shader = Shader::new(world);
     let mut scratch = Scratch::default();
     let cam = &world.camera;
     let n = world.settings.samples.max(1);
-    let row = (0..cam.width())
-        .map(|j| {
+    for (j, pixel) in (0..cam.width()).zip(out.iter_mut()) {
+        *pixel = {
             // The AOVs always come from the ray through the pixel centre (SPEC §4).
             let ray = cam.ray(i, j);
             let (mut c, hit) = shader.primary(&ray, &mut scratch);
@@ -206,7 +206,7 @@ fn render_row(world: &World, i: u32) -> (Vec<Pixel>, u64) {
                     object: s.solid + 1,
                 },
             }
-        })
-        .collect();
-    (row, scratch.rays)
+        };
+    }
+    scratch.rays
 }
