@@ -100,7 +100,7 @@ impl Complex {
 /// the last candidate if no doubling satisfies the check (only for points
 /// far from the surface or near overflow).
 pub fn spawn_origin(solid: &Solid, point: &Point3<f64>, direction: &Vector3<f64>) -> Point3<f64> {
-    match Prepared::at(solid, point) {
+    match Prepared::at(solid, point, None) {
         Some(p) => match p.side(direction) {
             Some(sigma) => p.offset(solid, point, sigma),
             None => *point,
@@ -122,9 +122,21 @@ struct Prepared {
 
 impl Prepared {
     /// `None` where the normal is undefined (a zero gradient, a cone's apex).
-    fn at(solid: &Solid, point: &Point3<f64>) -> Option<Prepared> {
+    /// `normal`: the unit normal at `point` if the caller has it (either
+    /// orientation; it is turned along the gradient), else it is computed
+    /// from the gradient, `normal::unit(∇f)` as [`Solid::normal`] does.
+    fn at(solid: &Solid, point: &Point3<f64>, normal: Option<&Vector3<f64>>) -> Option<Prepared> {
         let Bounded { f, err, gradient } = eval(solid, point);
-        let n = quadric::normal::unit(gradient)?;
+        let n = match normal {
+            Some(n) if n.iter().any(|c| *c != 0.0) && n.iter().all(|c| c.is_finite()) => {
+                if n.dot(&gradient) < 0.0 {
+                    -n
+                } else {
+                    *n
+                }
+            }
+            _ => quadric::normal::unit(gradient)?,
+        };
         // Rounding `o'` to doubles moves it by up to `u|o'ᵢ|` per
         // coordinate, i.e. `u Σ|o'ᵢ n̂ᵢ|` along the normal (the floor set by
         // the world coordinates; pbrt's `dot(|n|, pError)`).
@@ -172,6 +184,8 @@ impl Prepared {
 pub struct Spawner<'c> {
     solid: Option<&'c Solid>,
     point: Point3<f64>,
+    /// The unit normal at `point`, when the caller knew it.
+    normal: Option<Vector3<f64>>,
     prepared: Option<Option<Prepared>>,
     /// The origins for `σ = -1` and `σ = +1`.
     origins: [Option<Point3<f64>>; 2],
@@ -183,7 +197,8 @@ impl Spawner<'_> {
     pub fn ray(&mut self, direction: &Vector3<f64>) -> Result<Ray, GeometryError> {
         let Some(solid) = self.solid else { return Ray::new(self.point, *direction) };
         let point = self.point;
-        let prepared = *self.prepared.get_or_insert_with(|| Prepared::at(solid, &point));
+        let normal = self.normal;
+        let prepared = *self.prepared.get_or_insert_with(|| Prepared::at(solid, &point, normal.as_ref()));
         let origin = match prepared.and_then(|p| p.side(direction).map(|sigma| (p, sigma))) {
             None => point,
             Some((p, sigma)) => {
@@ -200,7 +215,18 @@ impl Complex {
     pub fn spawner(&self, surface: Surface, point: &Point3<f64>) -> Spawner<'_> {
         let solid = self.blocks().get(surface.block.index()).and_then(|b| b.solids().get(surface.solid as usize));
         let finite = point.iter().all(|c| c.is_finite());
-        Spawner { solid: solid.filter(|_| finite), point: *point, prepared: None, origins: [None; 2] }
+        Spawner { solid: solid.filter(|_| finite), point: *point, normal: None, prepared: None, origins: [None; 2] }
+    }
+
+    /// [`Complex::spawner`] for a hit whose unit normal is known
+    /// ([`Hit::normal`], `Event::normal`; either orientation), so that the
+    /// point's normal is not computed a second time. `normal` must be the
+    /// solid's own normal at `point` ([`Solid::normal`], as a hit's is):
+    /// the rays are then exactly `spawner`'s (tested). It decides which
+    /// side a direction leaves on; a zero or non-finite `normal` is ignored
+    /// (the normal is computed).
+    pub fn spawner_with_normal(&self, surface: Surface, point: &Point3<f64>, normal: &Vector3<f64>) -> Spawner<'_> {
+        Spawner { normal: Some(*normal), ..self.spawner(surface, point) }
     }
 }
 

@@ -323,6 +323,27 @@ fn spawned_rays_never_hit_their_own_surface_nor_miss_a_near_one() {
 }
 
 #[test]
+fn a_spawner_given_the_hit_normal_spawns_the_same_rays() {
+    let compared = core::cell::Cell::new(0);
+    for (i, at) in DISTANCES.into_iter().enumerate() {
+        for scene in scenes(at) {
+            // Compares the rays of `spawn_ray` and of a spawner given the
+            // normal; nothing is returned, so `run` judges nothing.
+            run(&scene, 12, 0x5ec0_1000 + i as u64, |c, hit, dir| {
+                let want = hit.spawn_ray(c, dir);
+                for n in [hit.normal, -hit.normal] {
+                    let got = c.spawner_with_normal(hit.surface(), &hit.point, &n).ray(dir);
+                    assert_eq!(got, want, "{}: normal {n:?}, direction {dir:?}", scene.name);
+                    compared.set(compared.get() + 1);
+                }
+                None
+            });
+        }
+    }
+    assert!(compared.get() > 1000, "too few rays compared: {}", compared.get());
+}
+
+#[test]
 fn rays_from_the_raw_hit_point_fail_the_same_oracle() {
     // The control: the same harness must catch the acne `spawn_ray` removes.
     let mut failures = 0;

@@ -173,7 +173,8 @@ impl<'w> Shader<'w> {
         let mut c = weigh(&mat.ambient, &ambient);
 
         // Every secondary ray of this point leaves from one of two origins.
-        let mut spawner = self.complex.spawner(complex::Surface { block: e.block, solid: e.solid }, &e.point);
+        let surface = complex::Surface { block: e.block, solid: e.solid };
+        let mut spawner = self.complex.spawner_with_normal(surface, &e.point, &e.normal);
 
         let wants_diffuse = !is_zero(&mat.diffuse);
         let wants_specular = !is_zero(&mat.specular);
