@@ -222,7 +222,9 @@ impl Complex {
     /// ([`Hit::normal`], `Event::normal`; either orientation), so that the
     /// point's normal is not computed a second time. `normal` must be the
     /// solid's own normal at `point` ([`Solid::normal`], as a hit's is):
-    /// the rays are then exactly `spawner`'s (tested). It decides which
+    /// the rays are then exactly `spawner`'s (tested), except far along an
+    /// ideal cylinder's axis, where `Solid::normal` slides the point along
+    /// the axis first and is the more accurate of the two. It decides which
     /// side a direction leaves on; a zero or non-finite `normal` is ignored
     /// (the normal is computed).
     pub fn spawner_with_normal(&self, surface: Surface, point: &Point3<f64>, normal: &Vector3<f64>) -> Spawner<'_> {
