@@ -16,8 +16,9 @@ use wide::{f64x4, CmpGt, CmpLe, CmpLt};
 
 use crate::Aabb;
 
-/// Leaves hold at most this many blocks (unless their centres coincide and
-/// the depth limit is reached).
+/// Leaves hold at most this many blocks, except at the depth limit: so a
+/// leaf's box is its block's box, and a walk visits exactly the blocks
+/// whose own boxes it enters.
 const LEAF_SIZE: usize = 1;
 /// Number of centroid bins per axis for the SAH.
 const BINS: usize = 16;
@@ -260,11 +261,10 @@ impl Bvh {
     /// Visits the blocks whose boxes the ray crosses within `[t_min, *t_max]`,
     /// nearest box first, calling `visit(k, box_entry, t_max)` with `k` the
     /// position in [`Bvh::items`]; `visit` may lower `*t_max` to cut off
-    /// everything farther away (early exit). A leaf of several blocks (the
-    /// SAH keeps two together where that is cheaper; the depth limit makes
-    /// bigger ones) is visited whole when the ray crosses the leaf's box:
-    /// a block whose own box the ray misses may be visited then (its set,
-    /// clipped to its box, is empty).
+    /// everything farther away (early exit). A leaf holds one block, except
+    /// at the depth limit, where a leaf is visited whole when the ray
+    /// crosses its box (a block whose own box the ray misses then has an
+    /// empty set after the clip to its box).
     #[inline]
     pub(crate) fn traverse(&self, ray: &RayBoxes, t_min: f64, t_max: &mut f64, visit: impl FnMut(u32, f64, &mut f64)) {
         self.walk::<true>(ray, t_min, t_max, visit);
@@ -345,8 +345,8 @@ impl Bvh {
         }
     }
 
-    /// Visits the blocks whose boxes contain `p`, and the other blocks of a
-    /// leaf of several whose box contains it (see [`Bvh::traverse`]).
+    /// Visits the blocks whose boxes contain `p` (at the depth limit, every
+    /// block of a leaf whose box contains it; see [`Bvh::traverse`]).
     pub(crate) fn visit_point(&self, p: &[f64; 3], mut visit: impl FnMut(u32)) {
         if self.nodes.is_empty() {
             return;
@@ -481,31 +481,25 @@ fn half_area(min: &[f64; 3], max: &[f64; 3]) -> f64 {
 }
 
 /// Partitions `work` for two children and returns the size of the left
-/// part, or `None` for a leaf: the cheapest binned SAH split; if the centres
-/// coincide (no SAH split separates them) and the leaf would be big, small
-/// boxes to one side and large to the other, so that a ray missing the
-/// small ones skips them.
+/// part, or `None` for a leaf (at most [`LEAF_SIZE`] blocks): the cheapest
+/// binned SAH split; if the centres coincide (no SAH split separates them),
+/// small boxes to one side and large to the other, so that a ray missing
+/// the small ones skips them. A split is made even where the SAH would
+/// price a leaf of two blocks lower: one block per leaf keeps the walks
+/// exact, and the four-wide collapse absorbs the extra level.
 fn split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<usize> {
-    match sah_split(work, min, max) {
-        Some(SahSplit::Split(mid)) => Some(mid),
-        Some(SahSplit::Leaf) => None,
-        None if work.len() > LEAF_SIZE => {
-            work.sort_unstable_by(|a, b| half_area(&a.min, &a.max).total_cmp(&half_area(&b.min, &b.max)));
-            Some(work.len() / 2)
-        }
-        None => None,
+    if work.len() <= LEAF_SIZE {
+        return None;
     }
-}
-
-enum SahSplit {
-    Split(usize),
-    Leaf,
+    sah_split(work, min, max).or_else(|| {
+        work.sort_unstable_by(|a, b| half_area(&a.min, &a.max).total_cmp(&half_area(&b.min, &b.max)));
+        Some(work.len() / 2)
+    })
 }
 
 /// Partitions `work` by the cheapest binned SAH split and returns the size
-/// of the left part, or `Leaf` if a leaf is cheaper; `None` if no split
-/// separates the centres.
-fn sah_split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<SahSplit> {
+/// of the left part; `None` if no split separates the centres.
+fn sah_split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<usize> {
     let mut cmin = [f64::INFINITY; 3];
     let mut cmax = [f64::NEG_INFINITY; 3];
     for e in work.iter() {
@@ -515,9 +509,6 @@ fn sah_split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<SahSp
         }
     }
     let parent = half_area(min, max);
-    // Cost of a leaf relative to one traversal step: testing a block costs
-    // about as much as a few box tests.
-    let leaf_cost = work.len() as f64;
     let mut best: Option<(f64, usize, usize)> = None; // (cost, axis, bins on the left)
     for axis in 0..3 {
         let extent = cmax[axis] - cmin[axis];
@@ -567,12 +558,9 @@ fn sah_split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<SahSp
             }
         }
     }
-    let (cost, axis, bins_left) = best?;
-    // A degenerate parent (zero area) makes every cost NaN or ∞: split anyway
-    // when the leaf would be big, to keep leaves small.
-    if cost.is_finite() && cost >= leaf_cost && work.len() <= 2 * LEAF_SIZE {
-        return Some(SahSplit::Leaf);
-    }
+    // A degenerate parent (zero area) makes every cost NaN or ∞; any split
+    // found still separates the centres.
+    let (_, axis, bins_left) = best?;
     let extent = cmax[axis] - cmin[axis];
     let scale = BINS as f64 / extent;
     let goes_left = |e: &Entry| (((e.centre[axis] - cmin[axis]) * scale) as usize).min(BINS - 1) < bins_left;
@@ -584,7 +572,7 @@ fn sah_split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<SahSp
             i += 1;
         }
     }
-    (i > 0 && i < work.len()).then_some(SahSplit::Split(i))
+    (i > 0 && i < work.len()).then_some(i)
 }
 
 #[cfg(test)]
@@ -630,9 +618,6 @@ mod tests {
 
     /// [`RayBoxes::enter4`] for a node whose lane 0 holds the box (the other
     /// lanes empty, which must never be entered).
-    /// A box's lower and upper corners.
-    type Corners = ([f64; 3], [f64; 3]);
-
     fn lane0(rb: &RayBoxes, min: &[f64; 3], max: &[f64; 3], t_min: f64, t_max: f64) -> Option<f64> {
         let mut node = Node4::EMPTY;
         node.set_box(0, min, max);
@@ -669,11 +654,8 @@ mod tests {
             }
         }
 
-        /// The collapsed tree visits every block whose own box the ray
-        /// enters (no early exit), once, and otherwise only blocks that share
-        /// a leaf with others (the SAH keeps two blocks together where that
-        /// is cheaper, and the depth limit makes bigger leaves) whose leaf
-        /// box the ray enters; likewise `visit_point` for the blocks whose
+        /// The collapsed tree visits exactly the blocks whose own boxes the
+        /// ray enters (no early exit), and `visit_point` exactly those whose
         /// boxes hold the point.
         #[test]
         fn tree_visits_what_brute_force_does(boxes in prop::collection::vec(boxed(), 1..60), ray in ray(), p in [coord(), coord(), coord()]) {
@@ -683,37 +665,23 @@ mod tests {
                 .map(|(i, (lo, hi))| (i as u32, Aabb { min: Point3::from(*lo), max: Point3::from(*hi) }))
                 .collect();
             let bvh = Bvh::build(&entries);
-            // Every leaf with more than one block: its box and its blocks.
-            let shared: Vec<(Corners, &[u32])> = bvh
-                .nodes
-                .iter()
-                .flat_map(|node| (0..4).map(move |lane| (node, lane)))
-                .filter(|(node, lane)| node.count[*lane] > 1)
-                .map(|(node, lane)| {
-                    let corner = |c: &[f64x4; 3]| [0, 1, 2].map(|i| c[i].to_array()[lane]);
-                    let (first, count) = (node.child[lane] as usize, node.count[lane] as usize);
-                    ((corner(&node.min), corner(&node.max)), &bvh.items[first..first + count])
-                })
-                .collect();
             let rb = RayBoxes::new(&ray);
             let mut seen = Vec::new();
             let mut t_max = f64::INFINITY;
             bvh.traverse(&rb, 0.0, &mut t_max, |k, _, _| seen.push(bvh.items()[k as usize]));
             seen.sort_unstable();
-            let enters = |(lo, hi): &Corners| rb.enter(lo, hi, 0.0, f64::INFINITY).is_some();
-            let with_leaf = |i: u32, test: &dyn Fn(&Corners) -> bool| {
-                test(&boxes[i as usize]) || shared.iter().any(|(leaf, items)| items.contains(&i) && test(leaf))
-            };
+            let expected: Vec<u32> = (0..boxes.len() as u32)
+                .filter(|&i| rb.enter(&boxes[i as usize].0, &boxes[i as usize].1, 0.0, f64::INFINITY).is_some())
+                .collect();
             // Inner boxes hold their children, so nothing is culled early;
             // a leaf is visited once.
-            let want: Vec<u32> = (0..boxes.len() as u32).filter(|&i| with_leaf(i, &enters)).collect();
-            prop_assert_eq!(seen, want);
+            prop_assert_eq!(seen, expected);
             let mut inside = Vec::new();
             bvh.visit_point(&p, |i| inside.push(i));
             inside.sort_unstable();
-            let holds = |(lo, hi): &Corners| (0..3).all(|i| lo[i] <= p[i] && p[i] <= hi[i]);
-            let want: Vec<u32> = (0..boxes.len() as u32).filter(|&i| with_leaf(i, &holds)).collect();
-            prop_assert_eq!(inside, want);
+            let holds = |(lo, hi): &([f64; 3], [f64; 3])| (0..3).all(|i| lo[i] <= p[i] && p[i] <= hi[i]);
+            let expected: Vec<u32> = (0..boxes.len() as u32).filter(|&i| holds(&boxes[i as usize])).collect();
+            prop_assert_eq!(inside, expected);
         }
     }
 
