@@ -12,7 +12,7 @@
 
 use arrayvec::ArrayVec;
 use quadric::Ray;
-use wide::{f64x4, CmpGt, CmpLe, CmpLt};
+use wide::{f64x4, CmpGe, CmpGt, CmpLe, CmpLt};
 
 use crate::Aabb;
 
@@ -170,6 +170,52 @@ impl RayBoxes {
             let b = (node.max[i] + f64x4::splat(self.shift_hi[i])) * inv;
             let (a, b) = if self.inv[i] >= 0.0 { (a, b) } else { (b, a) };
             // `if a > t0 { t0 = a }` lane by lane: NaN keeps `t0`.
+            t0 = a.cmp_gt(t0).blend(a, t0);
+            t1 = b.cmp_lt(t1).blend(b, t1);
+        }
+        let slack = f64x4::splat(4.0 * f64::EPSILON) * t1.abs().max(t0.abs());
+        let hit = t0.cmp_lt(f64x4::splat(f64::INFINITY)) & t0.cmp_le(t1 + slack);
+        (t0 - slack, hit.move_mask() as u32)
+    }
+}
+
+/// Four rays prepared for slab tests, lane by lane: the [`RayBoxes`] of
+/// each, transposed, so that one box is tested against all four at once.
+/// Each lane computes exactly what [`RayBoxes::enter4`] computes for its
+/// ray (the same operations on the same values), so a packet walk enters
+/// a box for a lane exactly when that ray's own walk would.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RayBoxes4 {
+    inv: [f64x4; 3],
+    shift_lo: [f64x4; 3],
+    shift_hi: [f64x4; 3],
+    /// All ones in the lanes whose `inv >= 0` (the lower face is met first).
+    forward: [f64x4; 3],
+}
+
+impl RayBoxes4 {
+    pub(crate) fn new(rays: &[RayBoxes; 4]) -> Self {
+        let lanes = |f: &dyn Fn(&RayBoxes) -> f64| f64x4::new([f(&rays[0]), f(&rays[1]), f(&rays[2]), f(&rays[3])]);
+        let inv = [0, 1, 2].map(|i| lanes(&|r| r.inv[i]));
+        RayBoxes4 {
+            inv,
+            shift_lo: [0, 1, 2].map(|i| lanes(&|r| r.shift_lo[i])),
+            shift_hi: [0, 1, 2].map(|i| lanes(&|r| r.shift_hi[i])),
+            forward: inv.map(|v| v.cmp_ge(f64x4::splat(0.0))),
+        }
+    }
+
+    /// Child `c` of `node` against the four rays: their entries and a bit
+    /// per ray that enters it within its `[t_min, t_max]`.
+    #[inline(always)]
+    fn enter_child(&self, node: &Node4, c: usize, t_min: f64x4, t_max: f64x4) -> (f64x4, u32) {
+        let (mut t0, mut t1) = (t_min, t_max);
+        for i in 0..3 {
+            let lo = f64x4::splat(node.min[i].as_array_ref()[c]);
+            let hi = f64x4::splat(node.max[i].as_array_ref()[c]);
+            let a = (lo + self.shift_lo[i]) * self.inv[i];
+            let b = (hi + self.shift_hi[i]) * self.inv[i];
+            let (a, b) = (self.forward[i].blend(a, b), self.forward[i].blend(b, a));
             t0 = a.cmp_gt(t0).blend(a, t0);
             t1 = b.cmp_lt(t1).blend(b, t1);
         }
@@ -341,6 +387,78 @@ impl Bvh {
             // Cannot overflow: see `STACK`.
             for &(t, r) in order[..n].iter().rev() {
                 stack.push((r, t));
+            }
+        }
+    }
+
+    /// [`Bvh::traverse`] for four rays at once, the lanes in `active`:
+    /// each node is read once for all of them. `visit(k, lane, t_max)` is
+    /// called for every block whose box lane `lane`'s ray crosses within
+    /// `[t_min, t_max[lane]]` (and may lower `t_max[lane]`), so each lane
+    /// visits at least the blocks its own [`Bvh::traverse`] visits: every
+    /// block its walk enters with the final `t_max`, and the boxes that hold
+    /// it at `t_min`. Children are taken nearest first by the nearest entry
+    /// among the lanes that enter them.
+    pub(crate) fn traverse4(
+        &self,
+        rays: &RayBoxes4,
+        active: u32,
+        t_min: f64,
+        t_max: &mut [f64; 4],
+        mut visit: impl FnMut(u32, usize, &mut [f64; 4]),
+    ) {
+        if self.nodes.is_empty() || active == 0 {
+            return;
+        }
+        let t_min4 = f64x4::splat(t_min);
+        // `(child | count << 32, lanes)` and each lane's entry.
+        let mut stack: ArrayVec<(u64, u32, f64x4), STACK> = ArrayVec::new();
+        stack.push((0, active, t_min4));
+        while let Some((r, lanes, t_enter)) = stack.pop() {
+            // `t_enter <= t_max` lane by lane (entries are never NaN).
+            let lanes = lanes & (t_enter.cmp_le(f64x4::new(*t_max)).move_mask() as u32);
+            if lanes == 0 {
+                continue;
+            }
+            let (child, count) = (r as u32, (r >> 32) as u32);
+            if count > 0 {
+                for k in child..child + count {
+                    let mut todo = lanes;
+                    while todo != 0 {
+                        let lane = todo.trailing_zeros() as usize;
+                        todo &= todo - 1;
+                        if t_enter.as_array_ref()[lane] <= t_max[lane] {
+                            visit(k, lane, t_max);
+                        }
+                    }
+                }
+                continue;
+            }
+            let node = &self.nodes[child as usize];
+            let t_max4 = f64x4::new(*t_max);
+            let mut order = [(0.0f64, 0u64, 0u32, f64x4::ZERO); 4];
+            let mut n = 0;
+            for c in 0..4 {
+                let (entry, hits) = rays.enter_child(node, c, t_min4, t_max4);
+                let hits = hits & lanes;
+                if hits == 0 {
+                    continue;
+                }
+                // The nearest entry among the lanes that enter.
+                let e = entry.to_array();
+                let key = (0..4).filter(|l| hits & (1 << l) != 0).fold(f64::INFINITY, |m, l| m.min(e[l]));
+                let item = (key, u64::from(node.child[c]) | u64::from(node.count[c]) << 32, hits, entry);
+                let mut j = n;
+                while j > 0 && order[j - 1].0 > item.0 {
+                    order[j] = order[j - 1];
+                    j -= 1;
+                }
+                order[j] = item;
+                n += 1;
+            }
+            // Cannot overflow: see `STACK`.
+            for &(_, r, hits, entry) in order[..n].iter().rev() {
+                stack.push((r, hits, entry));
             }
         }
     }

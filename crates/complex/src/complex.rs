@@ -7,7 +7,7 @@ use quadric::{Bound, Interval, IntervalSet, Ray};
 
 use crate::block::{SolidRef, Spans};
 use crate::bounds::block_boxes;
-use crate::bvh::{Bvh, RayBoxes};
+use crate::bvh::{Bvh, RayBoxes, RayBoxes4};
 use crate::kernel::Kernel;
 use crate::partition::{Event, Partition, Segment, Surface};
 use crate::{Aabb, Block, BlockId, ComplexError, Opacity};
@@ -600,40 +600,51 @@ impl Complex {
         // is the end of the run of overlapping intervals it is in. The boxes
         // holding the ray at ε enter at or before ε, before any entry found,
         // so the shrinking `t_max` never cuts them off.
-        let mut run_end = eps;
-        // `(t, block, solid, BVH slot)`.
-        let mut best: Option<(f64, u32, u32, Option<u32>)> = None;
-        let mut consider = |i: u32, k: Option<u32>, spans: &[Interval], t_max: &mut f64| {
-            let mut entry = None;
-            for iv in spans {
-                if iv.enter.t <= eps {
-                    if eps < iv.exit.t {
-                        run_end = run_end.max(iv.exit.t);
-                    }
-                } else if entry.is_none() && iv.enter.t > eps {
-                    entry = Some(iv);
-                }
-            }
-            if let Some(iv) = entry {
-                let t = iv.enter.t;
-                if t <= *t_max && best.map_or(true, |(bt, bi, _, _)| t < bt || (t == bt && i < bi)) {
-                    best = Some((t, i, iv.enter.solid, k));
-                    *t_max = t;
-                }
-            }
-        };
+        let mut nearest = Nearest::new(eps);
         let mut t_max = max_t;
         let mut scratch = Spans::Empty;
         for i in self.unbounded_crossed(&rb, eps, max_t) {
-            consider(i, None, self.block_spans(i, ray, &rb, &mut scratch), &mut t_max);
+            nearest.consider(i, None, self.block_spans(i, ray, &rb, &mut scratch), &mut t_max);
         }
         self.bvh.traverse(&rb, eps, &mut t_max, |k, _, t_max| {
-            consider(self.kernel.block(k), Some(k), self.slot_spans(k, ray, &rb, &mut scratch), t_max)
+            nearest.consider(self.kernel.block(k), Some(k), self.slot_spans(k, ray, &rb, &mut scratch), t_max)
         });
-        if run_end > eps {
-            return self.run_exit(ray, &rb, run_end, max_t);
+        self.nearest_hit(ray, &rb, &nearest, max_t)
+    }
+
+    /// [`Complex::cast_ray`] of four rays, for coherent rays such as a
+    /// camera's neighbouring pixels: in a complex of opaque blocks the four
+    /// share one walk of the BVH (each node is read once for all of them);
+    /// each answer is exactly `cast_ray`'s for its ray.
+    pub fn cast_rays(&self, rays: &[Ray; 4], max_t: f64) -> [Option<Hit>; 4] {
+        if self.any_transparent || max_t.partial_cmp(&self.epsilon) != Some(core::cmp::Ordering::Greater) {
+            return rays.each_ref().map(|r| self.cast_ray(r, max_t));
         }
-        let (t, block, solid, slot) = best?;
+        let eps = self.epsilon;
+        let rbs = rays.each_ref().map(RayBoxes::new);
+        let mut nearest = [Nearest::new(eps); 4];
+        let mut t_max = [max_t; 4];
+        let mut scratch = Spans::Empty;
+        for (lane, ray) in rays.iter().enumerate() {
+            for i in self.unbounded_crossed(&rbs[lane], eps, max_t) {
+                let spans = self.block_spans(i, ray, &rbs[lane], &mut scratch);
+                nearest[lane].consider(i, None, spans, &mut t_max[lane]);
+            }
+        }
+        self.bvh.traverse4(&RayBoxes4::new(&rbs), 0b1111, eps, &mut t_max, |k, lane, t_max| {
+            let spans = self.slot_spans(k, &rays[lane], &rbs[lane], &mut scratch);
+            nearest[lane].consider(self.kernel.block(k), Some(k), spans, &mut t_max[lane]);
+        });
+        [0, 1, 2, 3].map(|lane| self.nearest_hit(&rays[lane], &rbs[lane], &nearest[lane], max_t))
+    }
+
+    /// The hit a [`Nearest`] search found: the exit of the run the ray
+    /// starts in, else the nearest entry.
+    fn nearest_hit(&self, ray: &Ray, rb: &RayBoxes, nearest: &Nearest, max_t: f64) -> Option<Hit> {
+        if nearest.run_end > self.epsilon {
+            return self.run_exit(ray, rb, nearest.run_end, max_t);
+        }
+        let (t, block, solid, slot) = nearest.best?;
         // The normal from the packed copy of the solid, which the test just
         // read (the block's own copy is likely out of the caches by now).
         let (point, normal) = match slot.and_then(|k| self.kernel.solid(k, solid)) {
@@ -943,6 +954,48 @@ impl Complex {
                 normal,
                 same_medium,
             });
+        }
+    }
+}
+
+/// The search state of [`Complex::cast_opaque`] for one ray: the nearest
+/// entry after ε so far (lowest block id on ties) and the end of the run of
+/// intervals holding the ray at ε. The result depends only on which blocks
+/// are considered, not on their order.
+#[derive(Clone, Copy, Debug)]
+struct Nearest {
+    eps: f64,
+    run_end: f64,
+    /// `(t, block, solid, BVH slot)`.
+    best: Option<(f64, u32, u32, Option<u32>)>,
+}
+
+impl Nearest {
+    fn new(eps: f64) -> Self {
+        Nearest { eps, run_end: eps, best: None }
+    }
+
+    /// Takes block `i`'s intervals (from BVH slot `k`, if bounded) into
+    /// account, lowering `t_max` to a nearer entry.
+    #[inline(always)]
+    fn consider(&mut self, i: u32, k: Option<u32>, spans: &[Interval], t_max: &mut f64) {
+        let eps = self.eps;
+        let mut entry = None;
+        for iv in spans {
+            if iv.enter.t <= eps {
+                if eps < iv.exit.t {
+                    self.run_end = self.run_end.max(iv.exit.t);
+                }
+            } else if entry.is_none() && iv.enter.t > eps {
+                entry = Some(iv);
+            }
+        }
+        if let Some(iv) = entry {
+            let t = iv.enter.t;
+            if t <= *t_max && self.best.map_or(true, |(bt, bi, _, _)| t < bt || (t == bt && i < bi)) {
+                self.best = Some((t, i, iv.enter.solid, k));
+                *t_max = t;
+            }
         }
     }
 }

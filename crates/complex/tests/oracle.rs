@@ -58,6 +58,27 @@ fn ray_spec() -> impl Strategy<Value = Ray> {
     })
 }
 
+/// `cast_rays` answers every four rays exactly as `cast_ray` answers each:
+/// the given rays four at a time (mostly far apart), and for each of them a
+/// bundle of four near-parallel rays from its origin, as a camera's
+/// neighbouring pixels are (they share most of the walk).
+fn packets_agree(c: &Complex, rays: &[Ray], max_t: f64) -> Result<(), TestCaseError> {
+    let mut fours: Vec<[Ray; 4]> = rays.chunks_exact(4).map(|r| [r[0], r[1], r[2], r[3]]).collect();
+    for r in rays {
+        let d = r.direction();
+        let nudge = |k: usize| {
+            let e = [Vector3::x(), Vector3::y(), Vector3::z(), Vector3::zeros()][k];
+            Ray::new(r.origin(), d + 1e-3 * e).unwrap_or(*r)
+        };
+        fours.push([nudge(0), nudge(1), nudge(2), nudge(3)]);
+    }
+    for four in &fours {
+        let one_by_one = four.each_ref().map(|r| c.cast_ray(r, max_t));
+        prop_assert_eq!(c.cast_rays(four, max_t), one_by_one, "max_t = {}", max_t);
+    }
+    Ok(())
+}
+
 fn build(specs: &[Spec]) -> Complex {
     let blocks = specs
         .iter()
@@ -235,6 +256,9 @@ proptest! {
                 prop_assert_eq!(c.contains_point(&x), owner, "contains_point at t = {}", t);
             }
         }
+        for m in [f64::INFINITY, 1.0, 0.0] {
+            packets_agree(&c, &rays, m)?;
+        }
     }
 }
 
@@ -303,6 +327,8 @@ proptest! {
             let events: Vec<_> = c.partition(ray).events.iter().map(|e| (e.t, e.before, e.after)).collect();
             prop_assert_eq!(events, brute_events(&c, ray));
         }
+        packets_agree(&c, &rays, f64::INFINITY)?;
+        packets_agree(&c, &rays[..8], 2.0)?;
     }
 }
 

@@ -98,6 +98,27 @@ impl<'w> Shader<'w> {
         }
     }
 
+    /// [`Shader::primary`] of four rays: in a scene without transparent
+    /// blocks their first hits come from one shared BVH walk
+    /// ([`complex::Complex::cast_rays`]); the colours and surfaces are
+    /// exactly those of four `primary` calls.
+    pub fn primary4(&self, rays: &[Ray; 4], scratch: &mut Scratch) -> [(Rgb, Option<Surface>); 4] {
+        if self.transparent {
+            return rays.each_ref().map(|r| self.primary(r, scratch));
+        }
+        scratch.rays += 4;
+        let hits = self.complex.cast_rays(rays, f64::INFINITY);
+        [0, 1, 2, 3].map(|k| match hits[k] {
+            None => (self.background(), None),
+            Some(h) => {
+                let e = Event::of_hit(&h);
+                let n = facing_normal(&e.normal, &rays[k].direction());
+                let surface = Surface { t: e.t, normal: n, block: e.block, solid: e.solid };
+                (self.shade(&rays[k], &e, 0, 1.0, scratch), Some(surface))
+            }
+        })
+    }
+
     /// The colour seen along `ray` at recursion depth `depth`.
     pub fn trace(&self, ray: &Ray, depth: u32, scratch: &mut Scratch) -> Rgb {
         self.trace_weighted(ray, depth, 1.0, scratch)
@@ -122,17 +143,7 @@ impl<'w> Shader<'w> {
     fn first_event(&self, ray: &Ray, scratch: &mut Scratch) -> Option<Event> {
         scratch.rays += 1;
         if !self.transparent {
-            let h = self.complex.cast_ray(ray, f64::INFINITY)?;
-            let (before, after) = if h.entering { (None, Some(h.block)) } else { (Some(h.block), None) };
-            return Some(Event {
-                t: h.t,
-                point: h.point,
-                normal: h.normal,
-                block: h.block,
-                solid: h.solid,
-                before,
-                after,
-            });
+            return self.complex.cast_ray(ray, f64::INFINITY).map(|h| Event::of_hit(&h));
         }
         // The partition only as far as its first interface (`t > ε`, not
         // between two blocks of one medium), where this ray stops.
@@ -289,6 +300,14 @@ impl<'w> Shader<'w> {
             }
         }
         pass
+    }
+}
+
+impl Event {
+    /// The event of a hit in a scene without transparent blocks.
+    fn of_hit(h: &complex::Hit) -> Self {
+        let (before, after) = if h.entering { (None, Some(h.block)) } else { (Some(h.block), None) };
+        Event { t: h.t, point: h.point, normal: h.normal, block: h.block, solid: h.solid, before, after }
     }
 }
 
