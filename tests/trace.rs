@@ -129,3 +129,32 @@ fn trace_text_form_prints_full_precision() {
     let t = v["hit"]["t"].as_f64().unwrap();
     assert!(text.contains(&format!("{t:?}")), "{t:?} not in\n{text}");
 }
+
+/// `Shader::primary4` (four rays sharing one BVH walk) gives exactly the
+/// colours and surfaces of four `primary` calls, and casts as many rays:
+/// on every example and benchmark scene (opaque and transparent), for 2×2
+/// squares of neighbouring pixels and for four pixels far apart.
+#[test]
+fn four_primary_rays_at_once_are_four_single_ones() {
+    use render::shade::{Scratch, Shader};
+    let scenes = crate::support::all_scenes().into_iter().chain(crate::support::bench_scenes());
+    for path in scenes {
+        let w = world(&path, Some((64, 48)));
+        let shader = Shader::new(&w);
+        let cam = &w.camera;
+        let mut quads: Vec<[(u32, u32); 4]> = Vec::new();
+        for i in (0..48).step_by(6) {
+            for j in (0..64).step_by(5) {
+                quads.push([(i, j), (i, j + 1), (i + 1, j), (i + 1, j + 1)]);
+                quads.push([(i, j), (47 - i, 63 - j), (i / 2, 63 - j), (47 - i / 3, j / 2)]);
+            }
+        }
+        for quad in quads {
+            let rays = quad.map(|(i, j)| cam.ray(i, j));
+            let (mut one, mut four) = (Scratch::default(), Scratch::default());
+            let singles = rays.each_ref().map(|r| shader.primary(r, &mut one));
+            assert_eq!(shader.primary4(&rays, &mut four), singles, "{} at {quad:?}", path.display());
+            assert_eq!(four.rays, one.rays, "{}: rays cast", path.display());
+        }
+    }
+}

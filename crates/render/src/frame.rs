@@ -139,19 +139,21 @@ pub fn render_until(
     let mut pixels = vec![Pixel::default(); width * world.camera.height() as usize];
     let rays: u64 = pool.install(|| {
         pixels
-            .par_chunks_mut(width)
-            // Every row its own task: rows differ in cost by orders of
-            // magnitude (sky against glass), and rayon's adaptive split,
-            // made early from the thread count alone, left one of two
-            // cores idle for a quarter of the glass scene.
+            .par_chunks_mut(width * ROWS)
+            // Every pair of rows its own task: rows differ in cost by orders
+            // of magnitude (sky against glass), and rayon's adaptive split,
+            // made early from the thread count alone, left one of two cores
+            // idle for a quarter of the glass scene.
             .with_max_len(1)
             .enumerate()
-            .map(|(i, out)| {
+            .map(|(b, out)| {
                 if cancel.load(Ordering::Relaxed) {
                     return 0;
                 }
-                let rays = render_row(world, i as u32, out);
-                progress();
+                let rays = render_rows(world, (b * ROWS) as u32, out);
+                for _ in 0..out.len() / width {
+                    progress();
+                }
                 rays
             })
             .sum()
@@ -164,51 +166,82 @@ pub fn render_until(
     Ok((frame, Stats { rays, elapsed }))
 }
 
-/// Renders row `i` into `out` (one pixel per column), returning the rays cast.
-fn render_row(world: &World, i: u32, out: &mut [Pixel]) -> u64 {
+/// Rows per render task: two, so that four rays of a 2×2 square of pixels
+/// can share one walk of the BVH.
+const ROWS: usize = 2;
+
+/// Renders the rows from `i0` on into `out` (one or two whole rows),
+/// returning the rays cast.
+fn render_rows(world: &World, i0: u32, out: &mut [Pixel]) -> u64 {
     let shader = Shader::new(world);
     let mut scratch = Scratch::default();
     let cam = &world.camera;
+    let width = cam.width() as usize;
     let n = world.settings.samples.max(1);
-    let mut j = 0;
-    if n == 1 {
-        // Four neighbouring pixels at a time: their rays share one walk of
-        // the BVH (`Shader::primary4`), with the same results as one by one.
-        for quad in out.chunks_exact_mut(4) {
-            let rays = [j, j + 1, j + 2, j + 3].map(|j| cam.ray(i, j));
-            let shaded = shader.primary4(&rays, &mut scratch);
-            for (pixel, (c, hit)) in quad.iter_mut().zip(shaded) {
-                *pixel = pixel_of(c, if hit.is_some() { 1.0 } else { 0.0 }, hit);
+    if n > 1 {
+        for (di, row) in out.chunks_exact_mut(width).enumerate() {
+            for (j, pixel) in (0..cam.width()).zip(row.iter_mut()) {
+                *pixel = supersampled(&shader, &mut scratch, cam, i0 + di as u32, j, n);
             }
-            j += 4;
         }
+        return scratch.rays;
     }
-    for (j, pixel) in (j..cam.width()).zip(out[j as usize..].iter_mut()) {
-        // The AOVs always come from the ray through the pixel centre (SPEC §4).
-        let ray = cam.ray(i, j);
-        let (mut c, hit) = shader.primary(&ray, &mut scratch);
-        let mut alpha = if hit.is_some() { 1.0 } else { 0.0 };
-        if n > 1 {
-            // n×n stratified grid of sub-pixel positions; colour and coverage are their means.
-            c = Vector3::zeros();
-            let mut covered = 0u32;
-            for a in 0..n {
-                for b in 0..n {
-                    let di = (f64::from(a) + 0.5) / f64::from(n) - 0.5;
-                    let dj = (f64::from(b) + 0.5) / f64::from(n) - 0.5;
-                    let sub = cam.ray_at(f64::from(i) + di, f64::from(j) + dj);
-                    let (cs, h) = shader.primary(&sub, &mut scratch);
-                    c += cs;
-                    covered += u32::from(h.is_some());
-                }
-            }
-            let count = f64::from(n * n);
-            c /= count;
-            alpha = (f64::from(covered) / count) as f32;
+    // The pixel centres four at a time (SPEC §4): 2×2 squares, or 1×4 runs
+    // on a last single row. The four rays share one walk of the BVH
+    // (`Shader::primary4`), with the same results as one by one.
+    let (tile_w, rows) = if out.len() == 2 * width { (2, 2) } else { (4, 1) };
+    let mut j = 0;
+    while j + tile_w <= width {
+        let at = |k: usize| (i0 + (k / tile_w) as u32, (j + k % tile_w) as u32);
+        let rays = [0, 1, 2, 3].map(|k| {
+            let (i, j) = at(k);
+            cam.ray(i, j)
+        });
+        for (k, (c, hit)) in shader.primary4(&rays, &mut scratch).into_iter().enumerate() {
+            let (i, j) = at(k);
+            out[(i - i0) as usize * width + j as usize] = pixel_of(c, if hit.is_some() { 1.0 } else { 0.0 }, hit);
         }
-        *pixel = pixel_of(c, alpha, hit);
+        j += tile_w;
+    }
+    for i in i0..i0 + rows {
+        for j in j as u32..cam.width() {
+            let (c, hit) = shader.primary(&cam.ray(i, j), &mut scratch);
+            out[(i - i0) as usize * width + j as usize] = pixel_of(c, if hit.is_some() { 1.0 } else { 0.0 }, hit);
+        }
     }
     scratch.rays
+}
+
+/// Pixel `(i, j)` from an `n × n` stratified grid of sub-pixel rays: the
+/// mean of their colours, the fraction that hit, and the AOVs of the ray
+/// through the centre (SPEC §4). The sub-pixel rays go four at a time
+/// through [`Shader::primary4`], summed in the same order as one by one.
+fn supersampled(shader: &Shader, scratch: &mut Scratch, cam: &crate::camera::Camera, i: u32, j: u32, n: u32) -> Pixel {
+    let (_, hit) = shader.primary(&cam.ray(i, j), scratch);
+    let sub = |k: u32| {
+        let (a, b) = (k / n, k % n);
+        let di = (f64::from(a) + 0.5) / f64::from(n) - 0.5;
+        let dj = (f64::from(b) + 0.5) / f64::from(n) - 0.5;
+        cam.ray_at(f64::from(i) + di, f64::from(j) + dj)
+    };
+    let mut c = Vector3::zeros();
+    let mut covered = 0u32;
+    let count = n * n;
+    let mut k = 0;
+    while k + 4 <= count {
+        for (cs, h) in shader.primary4(&[sub(k), sub(k + 1), sub(k + 2), sub(k + 3)], scratch) {
+            c += cs;
+            covered += u32::from(h.is_some());
+        }
+        k += 4;
+    }
+    for k in k..count {
+        let (cs, h) = shader.primary(&sub(k), scratch);
+        c += cs;
+        covered += u32::from(h.is_some());
+    }
+    c /= f64::from(count);
+    pixel_of(c, (f64::from(covered) / f64::from(count)) as f32, hit)
 }
 
 /// The pixel of colour `c`, coverage `alpha` and the centre ray's surface `hit`.
