@@ -1,4 +1,4 @@
-//! `cast_ray` and `occluded` never allocate, with or without transparent blocks.
+//! `cast_ray`, `cast_rays` and `occluded` never allocate, with or without transparent blocks.
 
 use complex::{Block, Complex, ComplexOptions, MaterialKey, Opacity};
 use proptest::prelude::*;
@@ -48,6 +48,21 @@ fn cast_ray_does_not_allocate() {
         let info = allocation_counter::measure(|| n = hits(&c, &rays));
         assert!(n > 50, "the scene should be hit often, got {n}");
         assert_eq!(info.count_total, 0, "cast_ray allocated (transparent every {transparent_every})");
+    }
+}
+
+#[test]
+fn cast_rays_does_not_allocate() {
+    for transparent_every in [0, 4] {
+        let (c, rays) = scene(transparent_every);
+        let mut n = 0;
+        let info = allocation_counter::measure(|| {
+            for r in rays.chunks_exact(4) {
+                n += c.cast_rays(&[r[0], r[1], r[2], r[3]], f64::INFINITY).iter().flatten().count();
+            }
+        });
+        assert!(n > 50, "the scene should be hit often, got {n}");
+        assert_eq!(info.count_total, 0, "cast_rays allocated (transparent every {transparent_every})");
     }
 }
 
