@@ -104,6 +104,9 @@ enum Command {
         /// Precision mode of the kernel (docs/accuracy.md).
         #[arg(long, value_enum, default_value_t = PrecisionArg::Accurate)]
         precision: PrecisionArg,
+        /// Renders per scene (loaded once): the render time is the fastest, the median is printed too.
+        #[arg(long, value_name = "R", default_value_t = 1)]
+        runs: u32,
     },
     /// Write a benchmark scene (JSON).
     Generate {
@@ -278,16 +281,30 @@ fn run(command: Command) -> Result<(), Error> {
             print!("{}", render::schema_json());
             Ok(())
         }
-        Command::Bench { scenes, size, threads, precision } => {
+        Command::Bench { scenes, size, threads, precision, runs } => {
+            if !(1..=1000).contains(&runs) {
+                return Err(Error::Options(format!("--runs must be between 1 and 1000, got {runs}")));
+            }
             render::frame::set_global_threads(threads)?;
             println!(
-                "{:<28} {:>8} {:>9} {:>9} {:>9} {:>12} {:>12} {:>14} {:>14}",
-                "scene", "blocks", "load s", "size", "render s", "primary", "all rays", "primary/s", "all rays/s"
+                "{:<28} {:>8} {:>9} {:>9} {:>9} {:>12} {:>12} {:>14} {:>14} {:>9} {:>5}",
+                "scene",
+                "blocks",
+                "load s",
+                "size",
+                "render s",
+                "primary",
+                "all rays",
+                "primary/s",
+                "all rays/s",
+                "median s",
+                "runs"
             );
             for scene in scenes {
-                let m = render::bench::measure(&scene, (size.width, size.height), threads, precision.into())?;
+                let m =
+                    render::bench::measure_runs(&scene, (size.width, size.height), threads, precision.into(), runs)?;
                 println!(
-                    "{:<28} {:>8} {:>9.3} {:>9} {:>9.3} {:>12} {:>12} {:>14.0} {:>14.0}",
+                    "{:<28} {:>8} {:>9.3} {:>9} {:>9.3} {:>12} {:>12} {:>14.0} {:>14.0} {:>9.3} {:>5}",
                     scene.file_stem().map_or_else(|| scene.display().to_string(), |s| s.to_string_lossy().into()),
                     m.blocks,
                     m.load.as_secs_f64(),
@@ -296,7 +313,9 @@ fn run(command: Command) -> Result<(), Error> {
                     m.primary,
                     m.rays,
                     m.primary_per_second(),
-                    m.rays_per_second()
+                    m.rays_per_second(),
+                    m.median.as_secs_f64(),
+                    m.runs
                 );
             }
             Ok(())

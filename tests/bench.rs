@@ -73,3 +73,29 @@ fn bench_counts_primary_and_all_rays() {
     let o = komplex(dir.path(), &["bench", table.to_str().unwrap(), "--height", "0"]);
     assert_eq!(o.status.code(), Some(1));
 }
+
+#[test]
+fn bench_runs_keep_the_fastest_and_the_median() {
+    let dir = tempdir();
+    let table = scene("table.json");
+    let row = |runs: &str| {
+        let out = komplex_ok(
+            dir.path(),
+            &["bench", table.to_str().unwrap(), "--width", "24", "--height", "18", "--threads", "1", "--runs", runs],
+        );
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        let header: Vec<String> = text.lines().next().unwrap().split_whitespace().map(String::from).collect();
+        assert_eq!(header[header.len() - 2..], ["s", "runs"], "{text}");
+        text.lines().nth(1).unwrap().split_whitespace().map(String::from).collect::<Vec<_>>()
+    };
+    let (one, five) = (row("1"), row("5"));
+    assert_eq!((one[10].as_str(), five[10].as_str()), ("1", "5"));
+    // Every run renders the same image: the same rays.
+    assert_eq!((&one[5], &one[6]), (&five[5], &five[6]));
+    let (fastest, median): (f64, f64) = (five[4].parse().unwrap(), five[9].parse().unwrap());
+    assert!(fastest <= median, "{five:?}");
+    assert_eq!(one[4], one[9], "one run: the fastest is the median");
+    let o = komplex(dir.path(), &["bench", table.to_str().unwrap(), "--runs", "0"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--runs must be between 1 and 1000, got 0"));
+}

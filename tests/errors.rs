@@ -370,6 +370,7 @@ fn bad_option_values_exit_1() {
     );
     check(&["render", "ok.json", "-o", "out.exr", "--width", "100000"], 1, &["100000x75000 is too large"]);
     check(&["render", "ok.json", "-o", "out.exr", "--samples", "17"], 1, &["--samples must be between 1 and 16"]);
+    check(&["bench", "ok.json", "--runs", "0"], 1, &["--runs must be between 1 and 1000, got 0"]);
     check(
         &["render", "ok.json", "-o", "out.exr", "--png", "p.png", "--exposure", "nan"],
         1,

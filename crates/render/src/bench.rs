@@ -37,8 +37,13 @@ pub struct Measurement {
     pub primary: u64,
     /// All rays cast.
     pub rays: u64,
-    /// Wall-clock time of the render loop.
+    /// Wall-clock time of the render loop: the fastest of the runs.
     pub render: Duration,
+    /// The median render time of the runs (with an even count, the faster
+    /// of the two middle ones).
+    pub median: Duration,
+    /// Renders timed.
+    pub runs: u32,
 }
 
 impl Measurement {
@@ -63,6 +68,21 @@ pub fn measure(
     threads: Option<usize>,
     precision: crate::Precision,
 ) -> Result<Measurement, Error> {
+    measure_runs(path, size, threads, precision, 1)
+}
+
+/// [`measure`], with the scene loaded once and rendered `runs` times (at
+/// least once): the render time is the fastest run, and the median is
+/// reported too. On a shared machine single renders of a fraction of a
+/// second swing by several percent; the fastest of several is the steadier
+/// figure, and each run renders the same image (the ray counts agree).
+pub fn measure_runs(
+    path: &Path,
+    size: (Option<u32>, Option<u32>),
+    threads: Option<usize>,
+    precision: crate::Precision,
+    runs: u32,
+) -> Result<Measurement, Error> {
     let start = Instant::now();
     let mut world = crate::load(path)?;
     let load = start.elapsed();
@@ -70,14 +90,23 @@ pub fn measure(
     world.camera =
         world.camera.resized(size.0, size.1).map_err(|e| Error::Options(format!("--width/--height: {e}")))?;
     world.settings.samples = 1;
-    let (frame, stats) = crate::frame::render(&world, crate::frame::Options { threads }, &|| {})?;
+    let mut times: Vec<Duration> = Vec::new();
+    let (mut width, mut height, mut rays) = (0, 0, 0);
+    for _ in 0..runs.max(1) {
+        let (frame, stats) = crate::frame::render(&world, crate::frame::Options { threads }, &|| {})?;
+        (width, height, rays) = (frame.width, frame.height, stats.rays);
+        times.push(stats.elapsed);
+    }
+    times.sort_unstable();
     Ok(Measurement {
         blocks: world.complex.blocks().len(),
         load,
-        width: frame.width,
-        height: frame.height,
-        primary: u64::from(frame.width) * u64::from(frame.height),
-        rays: stats.rays,
-        render: stats.elapsed,
+        width,
+        height,
+        primary: u64::from(width) * u64::from(height),
+        rays,
+        render: times[0],
+        median: times[(times.len() - 1) / 2],
+        runs: times.len() as u32,
     })
 }
