@@ -364,7 +364,7 @@ impl Bvh {
                 while hits != 0 {
                     let lane = hits.trailing_zeros() as usize;
                     hits &= hits - 1;
-                    stack.push((u64::from(node.child[lane]) | u64::from(node.count[lane]) << 32, entry[lane]));
+                    stack.push((node.entry(lane), entry[lane]));
                 }
                 continue;
             }
@@ -375,14 +375,7 @@ impl Bvh {
             while hits != 0 {
                 let lane = hits.trailing_zeros() as usize;
                 hits &= hits - 1;
-                let item = (entry[lane], u64::from(node.child[lane]) | u64::from(node.count[lane]) << 32);
-                let mut j = n;
-                while j > 0 && order[j - 1].0 > item.0 {
-                    order[j] = order[j - 1];
-                    j -= 1;
-                }
-                order[j] = item;
-                n += 1;
+                insert_nearest(&mut order, &mut n, (entry[lane], node.entry(lane)));
             }
             // Cannot overflow: see `STACK`.
             for &(t, r) in order[..n].iter().rev() {
@@ -436,7 +429,7 @@ impl Bvh {
             }
             let node = &self.nodes[child as usize];
             let t_max4 = f64x4::new(*t_max);
-            let mut order = [(0.0f64, 0u64, 0u32, f64x4::ZERO); 4];
+            let mut order = [(0.0f64, (0u64, 0u32, f64x4::ZERO)); 4];
             let mut n = 0;
             for c in 0..4 {
                 let (entry, hits) = rays.enter_child(node, c, t_min4, t_max4);
@@ -447,17 +440,10 @@ impl Bvh {
                 // The nearest entry among the lanes that enter.
                 let e = entry.to_array();
                 let key = (0..4).filter(|l| hits & (1 << l) != 0).fold(f64::INFINITY, |m, l| m.min(e[l]));
-                let item = (key, u64::from(node.child[c]) | u64::from(node.count[c]) << 32, hits, entry);
-                let mut j = n;
-                while j > 0 && order[j - 1].0 > item.0 {
-                    order[j] = order[j - 1];
-                    j -= 1;
-                }
-                order[j] = item;
-                n += 1;
+                insert_nearest(&mut order, &mut n, (key, (node.entry(c), hits, entry)));
             }
             // Cannot overflow: see `STACK`.
-            for &(_, r, hits, entry) in order[..n].iter().rev() {
+            for &(_, (r, hits, entry)) in order[..n].iter().rev() {
                 stack.push((r, hits, entry));
             }
         }
@@ -494,7 +480,26 @@ impl Bvh {
     }
 }
 
+/// Inserts `item` into the first `*n` entries of `order`, kept sorted by
+/// their first field (nearest entry first; at most four children).
+#[inline(always)]
+fn insert_nearest<T: Copy>(order: &mut [(f64, T); 4], n: &mut usize, item: (f64, T)) {
+    let mut j = *n;
+    while j > 0 && order[j - 1].0 > item.0 {
+        order[j] = order[j - 1];
+        j -= 1;
+    }
+    order[j] = item;
+    *n += 1;
+}
+
 impl Node4 {
+    /// Child `lane` as a stack entry: `child | count << 32`.
+    #[inline(always)]
+    fn entry(&self, lane: usize) -> u64 {
+        u64::from(self.child[lane]) | u64::from(self.count[lane]) << 32
+    }
+
     const EMPTY: Node4 = Node4 {
         min: [f64x4::new([f64::INFINITY; 4]); 3],
         max: [f64x4::new([f64::NEG_INFINITY; 4]); 3],
