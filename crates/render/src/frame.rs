@@ -217,7 +217,8 @@ fn render_rows(world: &World, i0: u32, out: &mut [Pixel]) -> u64 {
 /// through the centre (SPEC §4). The sub-pixel rays go four at a time
 /// through [`Shader::primary4`], summed in the same order as one by one.
 fn supersampled(shader: &Shader, scratch: &mut Scratch, cam: &crate::camera::Camera, i: u32, j: u32, n: u32) -> Pixel {
-    let (_, hit) = shader.primary(&cam.ray(i, j), scratch);
+    // The centre ray only for the AOVs: its colour would not be used.
+    let hit = shader.surface(&cam.ray(i, j), scratch);
     let sub = |k: u32| {
         let (a, b) = (k / n, k % n);
         let di = (f64::from(a) + 0.5) / f64::from(n) - 0.5;

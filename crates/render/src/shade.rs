@@ -90,12 +90,15 @@ impl<'w> Shader<'w> {
     pub fn primary(&self, ray: &Ray, scratch: &mut Scratch) -> (Rgb, Option<Surface>) {
         match self.first_event(ray, scratch) {
             None => (self.background(), None),
-            Some(e) => {
-                let n = facing_normal(&e.normal, &ray.direction());
-                let surface = Surface { t: e.t, normal: n, block: e.block, solid: e.solid };
-                (self.shade(ray, &e, 0, 1.0, scratch), Some(surface))
-            }
+            Some(e) => (self.shade(ray, &e, 0, 1.0, scratch), Some(e.surface(ray))),
         }
+    }
+
+    /// The surface a primary ray hits, unshaded: [`Shader::primary`]'s
+    /// surface without its colour (the AOVs of a supersampled pixel, whose
+    /// colour comes from its sub-pixel rays).
+    pub fn surface(&self, ray: &Ray, scratch: &mut Scratch) -> Option<Surface> {
+        self.first_event(ray, scratch).map(|e| e.surface(ray))
     }
 
     /// [`Shader::primary`] of four rays: in a scene without transparent
@@ -112,9 +115,7 @@ impl<'w> Shader<'w> {
             None => (self.background(), None),
             Some(h) => {
                 let e = Event::of_hit(&h);
-                let n = facing_normal(&e.normal, &rays[k].direction());
-                let surface = Surface { t: e.t, normal: n, block: e.block, solid: e.solid };
-                (self.shade(&rays[k], &e, 0, 1.0, scratch), Some(surface))
+                (self.shade(&rays[k], &e, 0, 1.0, scratch), Some(e.surface(&rays[k])))
             }
         })
     }
@@ -304,6 +305,16 @@ impl<'w> Shader<'w> {
 }
 
 impl Event {
+    /// What a primary ray reports of this event for the AOVs.
+    fn surface(&self, ray: &Ray) -> Surface {
+        Surface {
+            t: self.t,
+            normal: facing_normal(&self.normal, &ray.direction()),
+            block: self.block,
+            solid: self.solid,
+        }
+    }
+
     /// The event of a hit in a scene without transparent blocks.
     fn of_hit(h: &complex::Hit) -> Self {
         let (before, after) = if h.entering { (None, Some(h.block)) } else { (Some(h.block), None) };
