@@ -115,8 +115,8 @@ pub fn render(world: &World, options: Options, progress: &(dyn Fn() + Sync)) -> 
 }
 
 /// [`render`], stopping early with [`Error::Interrupted`] once `cancel` is
-/// set (e.g. by a Ctrl-C handler). Workers look at the flag before each row,
-/// so the render stops within about one row's time per thread.
+/// set (e.g. by a Ctrl-C handler). Workers look at the flag before each pair of rows,
+/// so the render stops within about two rows' time per thread.
 pub fn render_until(
     world: &World,
     options: Options,
