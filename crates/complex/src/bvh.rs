@@ -29,8 +29,9 @@ const PARALLEL_FROM: usize = 4096;
 /// subtree could get deeper than this.
 const MAX_DEPTH: usize = 64;
 /// Traversal stack size: the four-wide tree is at most `MAX_DEPTH / 2` deep
-/// (see [`Bvh::collapse`]), and a step pops one entry and pushes at most
-/// four, so the stack holds at most `3 · depth + 1` entries.
+/// (see [`Bvh::collapse`]), and a step takes one entry and leaves at most
+/// four (`walk` keeps one of them aside as the next, which only lowers the
+/// count), so the stack holds at most `3 · depth + 1` entries.
 const STACK: usize = 3 * MAX_DEPTH.div_ceil(2) + 1;
 
 /// A node of the binary build: its box and either two children or a run of
@@ -345,8 +346,10 @@ impl Bvh {
         // parameter where the ray enters it. An `ArrayVec` is not zeroed: a
         // zeroed array of this size cost 8 % of a small scene's instructions.
         let mut stack: ArrayVec<(u64, f64), STACK> = ArrayVec::new();
-        stack.push((0, t_min));
-        while let Some((r, t_enter)) = stack.pop() {
+        // The next entry to take, kept out of the stack: a step that enters
+        // children goes on with one of them without pushing and popping it.
+        let mut next = Some((0u64, t_min));
+        while let Some((r, t_enter)) = next.take().or_else(|| stack.pop()) {
             if t_enter > *t_max {
                 continue;
             }
@@ -361,6 +364,11 @@ impl Bvh {
             let (entry, mut hits) = ray.enter4(node, t_min, *t_max);
             let entry = entry.to_array();
             if !NEAREST_FIRST {
+                if hits != 0 {
+                    let lane = hits.trailing_zeros() as usize;
+                    hits &= hits - 1;
+                    next = Some((node.entry(lane), entry[lane]));
+                }
                 while hits != 0 {
                     let lane = hits.trailing_zeros() as usize;
                     hits &= hits - 1;
@@ -378,8 +386,11 @@ impl Bvh {
                 insert_nearest(&mut order, &mut n, (entry[lane], node.entry(lane)));
             }
             // Cannot overflow: see `STACK`.
-            for &(t, r) in order[..n].iter().rev() {
+            for &(t, r) in order[1..n.max(1)].iter().rev() {
                 stack.push((r, t));
+            }
+            if n > 0 {
+                next = Some((order[0].1, order[0].0));
             }
         }
     }
