@@ -246,15 +246,17 @@ fn run(command: Command) -> Result<(), Error> {
                 return Err(Error::Interrupted);
             }
             let color = if half { ColorType::F16 } else { ColorType::F32 };
-            render::exr::write_exr(&frame, &output, color)?;
+            let (width, height) = (frame.width, frame.height);
+            // The preview first: the EXR writer takes the frame's planes over.
             if let Some(p) = &png {
                 render::png::write_png(&frame, p, exposure)?;
             }
+            render::exr::write_exr(frame, &output, color)?;
             eprintln!(
                 "{}: {}x{} in {:.2} s, {} rays, {:.2} Mrays/s",
                 output.display(),
-                frame.width,
-                frame.height,
+                width,
+                height,
                 stats.elapsed.as_secs_f64(),
                 stats.rays,
                 stats.rays_per_second() / 1e6

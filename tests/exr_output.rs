@@ -65,13 +65,13 @@ fn every_scene_renders_and_reads_back() {
         assert!(png.exists());
         let wd = world(&scene, Some((w as u32, h as u32)));
         let frame = render_frame(&wd);
-        let hits = frame.pixels.iter().filter(|p| p.block != 0).count();
+        let hits = frame.pixels().filter(|p| p.block != 0).count();
         assert!(hits > w * h / 10, "{}: only {hits} pixels hit anything", scene.display());
         let Some(exr) = read_exr(&out) else { return };
         check_layout(&exr, "f32", w, h);
         check_values(&exr, wd.complex.blocks().len());
         // The file holds exactly what the renderer computed.
-        for (k, p) in frame.pixels.iter().enumerate() {
+        for (k, p) in frame.pixels().enumerate() {
             let (i, j) = (k / w, k % w);
             // serde_json's float parsing is not always correctly rounded in
             // f64; every sample is an f32, so compare in f32.
@@ -99,7 +99,7 @@ fn half_writes_f16_colour_and_f32_aovs() {
     let Some(exr) = read_exr(&out) else { return };
     check_layout(&exr, "f16", 32, 24);
     let frame = render_frame(&world(&scene, Some((32, 24))));
-    for (k, p) in frame.pixels.iter().enumerate() {
+    for (k, p) in frame.pixels().enumerate() {
         let r = exr.channels["R"].samples[k];
         let want = f64::from(p.rgb[0]);
         // f16 keeps 11 significant bits.

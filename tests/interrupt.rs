@@ -57,5 +57,5 @@ fn a_set_flag_stops_the_render_loop() {
     assert!(rows.load(Ordering::SeqCst) <= 5, "{} rows rendered after the flag", rows.load(Ordering::SeqCst));
     // Without the flag the same loop finishes.
     let (flag, rows) = (AtomicBool::new(false), AtomicU32::new(1000));
-    assert_eq!(run(&flag, &rows).unwrap().0.pixels.len(), 16 * 200);
+    assert_eq!(run(&flag, &rows).unwrap().0.len(), 16 * 200);
 }

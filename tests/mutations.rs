@@ -140,7 +140,7 @@ proptest! {
                 world.settings.max_depth = world.settings.max_depth.min(3);
                 world.settings.samples = world.settings.samples.min(2);
                 let (frame, _) = render::frame::render(&world, Default::default(), &|| {}).unwrap();
-                prop_assert_eq!(frame.pixels.len(), 6);
+                prop_assert_eq!(frame.len(), 6);
             }
             Err(e) => {
                 let msg = e.to_string();

@@ -63,8 +63,7 @@ fn povray_masks_match_block_ids() {
     // The example scenes and the committed benchmark scenes (rotated boxes
     // and capped cylinders, hundreds of small spheres).
     for scene in all_scenes().into_iter().chain(bench_scenes()) {
-        let ours: Vec<u32> =
-            render_frame(&world(&scene, Some((WIDTH, HEIGHT)))).pixels.iter().map(|p| p.block).collect();
+        let ours: Vec<u32> = render_frame(&world(&scene, Some((WIDTH, HEIGHT)))).block;
         let theirs = pov_mask(dir.path(), &scene);
         let same = ours.iter().zip(&theirs).filter(|(a, b)| a == b).count();
         let share = same as f64 / ours.len() as f64;

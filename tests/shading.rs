@@ -410,7 +410,7 @@ fn overflowing_colours_give_infinity_not_nan() {
         "blocks": [ { "material": "m", "objects": [ { "sphere": { "radius": 10 } } ] } ] }"#;
     let dir = tempdir();
     let frame = render_frame(&world(&write_scene(dir.path(), "overflow.json", json), None));
-    for p in &frame.pixels {
+    for p in frame.pixels() {
         assert!(p.rgb.iter().all(|c| !c.is_nan()), "{p:?}");
     }
     assert_eq!(frame.at(1, 1).rgb, [f32::INFINITY, 0.0, 0.0]);
@@ -444,6 +444,6 @@ fn mirrors_around_glass_do_not_explode_the_ray_tree() {
         let w = world(&write_scene(dir.path(), &format!("deep{depth}.json"), &scene(depth)), None);
         let (frame, stats) = render::frame::render(&w, render::frame::Options::default(), &|| {}).unwrap();
         assert!(stats.rays < 50_000, "depth {depth}: {} rays for one pixel", stats.rays);
-        assert!(frame.pixels[0].rgb.iter().all(|c| c.is_finite() && *c > 0.0), "{:?}", frame.pixels[0]);
+        assert!(frame.pixel(0).rgb.iter().all(|c| c.is_finite() && *c > 0.0), "{:?}", frame.pixel(0));
     }
 }

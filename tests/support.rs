@@ -189,11 +189,11 @@ pub fn rendered(dir: &Path, scene: &Path) -> Exr {
     let frame = render_frame(&world(scene, None));
     let f32s = |f: &dyn Fn(&render::frame::Pixel) -> f32| Channel {
         kind: "f32".into(),
-        samples: frame.pixels.iter().map(|p| f64::from(f(p))).collect(),
+        samples: frame.pixels().map(|p| f64::from(f(&p))).collect(),
     };
     let u32s = |f: &dyn Fn(&render::frame::Pixel) -> u32| Channel {
         kind: "u32".into(),
-        samples: frame.pixels.iter().map(|p| f64::from(f(p))).collect(),
+        samples: frame.pixels().map(|p| f64::from(f(&p))).collect(),
     };
     let channels = [
         ("R", f32s(&|p| p.rgb[0])),

@@ -1,5 +1,6 @@
 //! The render loop: one ray per pixel centre, rows in parallel.
 
+use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -10,7 +11,8 @@ use crate::error::Error;
 use crate::scene::World;
 use crate::shade::{Scratch, Shader};
 
-/// One pixel of every output channel.
+/// One pixel of every output channel (read out of a [`Frame`]'s planes by
+/// [`Frame::at`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Pixel {
     /// Linear RGB.
@@ -28,22 +30,166 @@ pub struct Pixel {
     pub object: u32,
 }
 
-/// A rendered image, row-major from the top-left pixel.
+/// A rendered image: one plane per output channel (the channels of
+/// [`Pixel`]), each `width * height` samples, row by row from the top-left
+/// pixel. Planes rather than an array of pixels, so that the frame is
+/// allocated zeroed (its pages mapped lazily, by the worker threads that
+/// write them, not first cleared by one thread) and the EXR writer takes
+/// each channel as it is.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     /// Width in pixels.
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// `width * height` pixels, row by row, top row first.
-    pub pixels: Vec<Pixel>,
+    /// Linear red, green and blue.
+    pub rgb: [Vec<f32>; 3],
+    /// Coverage ([`Pixel::alpha`]).
+    pub alpha: Vec<f32>,
+    /// Distance along the primary ray, `+∞` on a miss.
+    pub depth: Vec<f32>,
+    /// The world-space normal facing the camera, by component; zero on a miss.
+    pub normal: [Vec<f32>; 3],
+    /// 1-based block index, 0 on a miss.
+    pub block: Vec<u32>,
+    /// 1-based solid index within the block, 0 on a miss.
+    pub object: Vec<u32>,
 }
 
 impl Frame {
-    /// The pixel in row `i` (from the top) and column `j`.
-    pub fn at(&self, i: u32, j: u32) -> &Pixel {
-        &self.pixels[i as usize * self.width as usize + j as usize]
+    /// A frame of `width × height` pixels, every sample zero. The planes are
+    /// allocated zeroed (`vec![0.0; n]`), so their pages are mapped only
+    /// when first written.
+    fn zeroed(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        let f = || vec![0.0f32; n];
+        Frame {
+            width,
+            height,
+            rgb: [f(), f(), f()],
+            alpha: f(),
+            depth: f(),
+            normal: [f(), f(), f()],
+            block: vec![0; n],
+            object: vec![0; n],
+        }
     }
+
+    /// The number of pixels, `width * height`.
+    pub fn len(&self) -> usize {
+        self.alpha.len()
+    }
+
+    /// Whether the frame has no pixels.
+    pub fn is_empty(&self) -> bool {
+        self.alpha.is_empty()
+    }
+
+    /// The pixel at index `k` of the planes (row `k / width`, column `k % width`).
+    pub fn pixel(&self, k: usize) -> Pixel {
+        Pixel {
+            rgb: self.rgb.each_ref().map(|c| c[k]),
+            alpha: self.alpha[k],
+            depth: self.depth[k],
+            normal: self.normal.each_ref().map(|c| c[k]),
+            block: self.block[k],
+            object: self.object[k],
+        }
+    }
+
+    /// The pixel in row `i` (from the top) and column `j`.
+    pub fn at(&self, i: u32, j: u32) -> Pixel {
+        self.pixel(i as usize * self.width as usize + j as usize)
+    }
+
+    /// Every pixel, row by row from the top-left.
+    pub fn pixels(&self) -> impl ExactSizeIterator<Item = Pixel> + '_ {
+        (0..self.len()).map(|k| self.pixel(k))
+    }
+
+    /// The frame cut into runs of `chunk` pixels (the last may be shorter),
+    /// each writable on its own.
+    fn runs_mut(&mut self, chunk: usize) -> Vec<Run<'_>> {
+        let Frame { rgb: [r, g, b], alpha, depth, normal: [nx, ny, nz], block, object, .. } = self;
+        let mut f32s = [r, g, b, alpha, depth, nx, ny, nz].map(|p| p.chunks_mut(chunk));
+        let mut u32s = [block, object].map(|p| p.chunks_mut(chunk));
+        let mut runs = Vec::new();
+        loop {
+            let next_f = f32s.each_mut().map(Iterator::next);
+            let next_u = u32s.each_mut().map(Iterator::next);
+            let (Some([r, g, b, alpha, depth, nx, ny, nz]), Some([block, object])) =
+                (transpose(next_f), transpose(next_u))
+            else {
+                return runs;
+            };
+            runs.push(Run { rgb: [r, g, b], alpha, depth, normal: [nx, ny, nz], block, object });
+        }
+    }
+}
+
+/// `Some` of all the items, or `None` if any is missing (the planes have
+/// equal lengths, so they run out together).
+fn transpose<T, const N: usize>(items: [Option<T>; N]) -> Option<[T; N]> {
+    items.into_iter().collect::<Option<Vec<T>>>()?.try_into().ok()
+}
+
+/// A run of consecutive pixels of a [`Frame`], writable: the same range of
+/// every plane.
+struct Run<'a> {
+    rgb: [&'a mut [f32]; 3],
+    alpha: &'a mut [f32],
+    depth: &'a mut [f32],
+    normal: [&'a mut [f32]; 3],
+    block: &'a mut [u32],
+    object: &'a mut [u32],
+}
+
+impl Run<'_> {
+    fn len(&self) -> usize {
+        self.alpha.len()
+    }
+
+    /// Writes `pixels` (as many as the run holds) into the planes, a plane
+    /// at a time.
+    fn fill(&mut self, pixels: &[Pixel]) {
+        fn plane<T>(out: &mut [T], pixels: &[Pixel], f: impl Fn(&Pixel) -> T) {
+            for (o, p) in out.iter_mut().zip(pixels) {
+                *o = f(p);
+            }
+        }
+        for c in 0..3 {
+            plane(self.rgb[c], pixels, |p| p.rgb[c]);
+            plane(self.normal[c], pixels, |p| p.normal[c]);
+        }
+        plane(self.alpha, pixels, |p| p.alpha);
+        plane(self.depth, pixels, |p| p.depth);
+        plane(self.block, pixels, |p| p.block);
+        plane(self.object, pixels, |p| p.object);
+    }
+}
+
+thread_local! {
+    /// The pixels of the task a worker is on, before they go into the
+    /// frame's planes; kept from task to task, so it is allocated and
+    /// first touched once per thread.
+    static TASK_PIXELS: RefCell<Vec<Pixel>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Renders the run of rows from `i0` on (see [`render_rows`]) into `out`,
+/// through the worker's [`TASK_PIXELS`].
+fn render_run(world: &World, i0: u32, out: &mut Run) -> u64 {
+    let n = out.len();
+    let mut fresh = Vec::new();
+    TASK_PIXELS.with(|buf| {
+        let mut borrowed = buf.try_borrow_mut();
+        let buf = borrowed.as_deref_mut().unwrap_or(&mut fresh);
+        if buf.len() < n {
+            buf.resize(n, Pixel::default());
+        }
+        let rays = render_rows(world, i0, &mut buf[..n]);
+        out.fill(&buf[..n]);
+        rays
+    })
 }
 
 /// How a render went.
@@ -70,7 +216,8 @@ pub struct Options {
 }
 
 /// The largest image rendered (2^28 pixels, about 16k × 16k): the frame
-/// (40 bytes a pixel) and the EXR channels (40 more) are held in memory.
+/// (40 bytes a pixel, which the EXR writer takes over as its channels) is
+/// held in memory.
 pub const MAX_PIXELS: u64 = 1 << 28;
 
 /// The most worker threads a render starts.
@@ -134,23 +281,24 @@ pub fn render_until(
         .map_err(|e| Error::Options(format!("cannot start worker threads: {e}")))?;
     let start = Instant::now();
     // Rows are written in place: the frame is the only full-size buffer
-    // (a collected list of rows would double the peak memory).
+    // (a collected list of rows would double the peak memory). Its pages are
+    // first touched here, by the workers, in parallel.
     let width = world.camera.width() as usize;
-    let mut pixels = vec![Pixel::default(); width * world.camera.height() as usize];
+    let mut frame = Frame::zeroed(world.camera.width(), world.camera.height());
+    let runs = frame.runs_mut(width * ROWS);
     let rays: u64 = pool.install(|| {
-        pixels
-            .par_chunks_mut(width * ROWS)
+        runs.into_par_iter()
             // Every pair of rows its own task: rows differ in cost by orders
             // of magnitude (sky against glass), and rayon's adaptive split,
             // made early from the thread count alone, left one of two cores
             // idle for a quarter of the glass scene.
             .with_max_len(1)
             .enumerate()
-            .map(|(b, out)| {
+            .map(|(b, mut out)| {
                 if cancel.load(Ordering::Relaxed) {
                     return 0;
                 }
-                let rays = render_rows(world, (b * ROWS) as u32, out);
+                let rays = render_run(world, (b * ROWS) as u32, &mut out);
                 for _ in 0..out.len() / width {
                     progress();
                 }
@@ -162,7 +310,6 @@ pub fn render_until(
     if cancel.load(Ordering::Relaxed) {
         return Err(Error::Interrupted);
     }
-    let frame = Frame { width: world.camera.width(), height: world.camera.height(), pixels };
     Ok((frame, Stats { rays, elapsed }))
 }
 

@@ -24,7 +24,9 @@ pub fn encode(linear: f32, exposure: f32) -> u8 {
 
 /// Writes an 8-bit RGB sRGB preview of `frame` to `path`, atomically.
 pub fn write_png(frame: &Frame, path: &Path, exposure: f32) -> Result<(), Error> {
-    let bytes: Vec<u8> = frame.pixels.iter().flat_map(|p| p.rgb.map(|c| encode(c, exposure))).collect();
+    let [r, g, b] = &frame.rgb;
+    let bytes: Vec<u8> =
+        r.iter().zip(g).zip(b).flat_map(|((&r, &g), &b)| [r, g, b].map(|c| encode(c, exposure))).collect();
     let img = image::RgbImage::from_raw(frame.width, frame.height, bytes)
         .ok_or_else(|| Error::Encode { path: path.to_path_buf(), message: "buffer size mismatch".into() })?;
     write_atomic(path, |w| img.write_to(w, image::ImageFormat::Png).map_err(|e| e.to_string()))
