@@ -35,7 +35,8 @@ pub struct Pixel {
 /// pixel. Planes rather than an array of pixels, so that the frame is
 /// allocated zeroed (its pages mapped lazily, by the worker threads that
 /// write them, not first cleared by one thread) and the EXR writer takes
-/// each channel as it is.
+/// each channel as it is. Every plane holds `width * height` samples, as
+/// [`render`] makes them.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     /// Width in pixels.
@@ -86,6 +87,10 @@ impl Frame {
     }
 
     /// The pixel at index `k` of the planes (row `k / width`, column `k % width`).
+    ///
+    /// # Panics
+    ///
+    /// If `k` is not below [`Frame::len`].
     pub fn pixel(&self, k: usize) -> Pixel {
         Pixel {
             rgb: self.rgb.each_ref().map(|c| c[k]),
@@ -98,6 +103,10 @@ impl Frame {
     }
 
     /// The pixel in row `i` (from the top) and column `j`.
+    ///
+    /// # Panics
+    ///
+    /// If the pixel lies outside the frame.
     pub fn at(&self, i: u32, j: u32) -> Pixel {
         self.pixel(i as usize * self.width as usize + j as usize)
     }
