@@ -106,7 +106,7 @@ impl Frame {
     ///
     /// # Panics
     ///
-    /// If the pixel lies outside the frame.
+    /// If `i * width + j` is not below [`Frame::len`].
     pub fn at(&self, i: u32, j: u32) -> Pixel {
         self.pixel(i as usize * self.width as usize + j as usize)
     }
