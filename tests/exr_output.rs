@@ -106,3 +106,18 @@ fn half_writes_f16_colour_and_f32_aovs() {
         assert!((r - want).abs() <= want.abs() * 1e-3 + 1e-7, "R {r} vs {want}");
     }
 }
+
+#[test]
+fn a_frame_with_a_short_plane_is_an_error_and_writes_nothing() {
+    let dir = tempdir();
+    let scene = crate::support::scene("table.json");
+    let mut frame = render_frame(&world(&scene, Some((8, 6))));
+    frame.normal[1].pop();
+    let out = dir.path().join("short.exr");
+    let e = render::exr::write_exr(frame, &out, render::exr::ColorType::F32).unwrap_err();
+    let text = e.to_string();
+    assert!(text.contains("short.exr") && text.contains("every plane needs 48 samples"), "{text}");
+    assert!(text.contains("47"), "{text}");
+    assert!(!out.exists());
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "a temporary file was left behind");
+}

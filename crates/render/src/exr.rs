@@ -30,8 +30,31 @@ pub enum ColorType {
 /// Channels: `R`, `G`, `B`, `A` (f32 or f16), `Z` (f32 distance along the
 /// ray, `+∞` on a miss), `N.X`, `N.Y`, `N.Z` (f32 world-space normal facing
 /// the camera, 0 on a miss), `id.block`, `id.object` (u32, 1-based, 0 on a miss).
+///
+/// A frame whose planes do not all hold `width * height` samples (one built
+/// by hand) is an [`Error::Encode`], and nothing is written.
 pub fn write_exr(frame: Frame, path: &Path, color: ColorType) -> Result<(), Error> {
     let size = (frame.width as usize, frame.height as usize);
+    let n = size.0 * size.1;
+    let lengths = [
+        frame.rgb[0].len(),
+        frame.rgb[1].len(),
+        frame.rgb[2].len(),
+        frame.alpha.len(),
+        frame.depth.len(),
+        frame.normal[0].len(),
+        frame.normal[1].len(),
+        frame.normal[2].len(),
+        frame.block.len(),
+        frame.object.len(),
+    ];
+    if lengths.iter().any(|&l| l != n) {
+        let message = format!(
+            "the frame is {}x{}, so every plane needs {n} samples; the planes (R G B A Z N.X N.Y N.Z id.block id.object) hold {lengths:?}",
+            size.0, size.1
+        );
+        return Err(Error::Encode { path: path.to_path_buf(), message });
+    }
     let Frame { rgb: [r, g, b], alpha, depth, normal: [nx, ny, nz], block, object, .. } = frame;
     let colour = |plane: Vec<f32>| -> FlatSamples {
         match color {
