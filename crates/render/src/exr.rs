@@ -36,18 +36,7 @@ pub enum ColorType {
 pub fn write_exr(frame: Frame, path: &Path, color: ColorType) -> Result<(), Error> {
     let size = (frame.width as usize, frame.height as usize);
     let n = size.0 * size.1;
-    let lengths = [
-        frame.rgb[0].len(),
-        frame.rgb[1].len(),
-        frame.rgb[2].len(),
-        frame.alpha.len(),
-        frame.depth.len(),
-        frame.normal[0].len(),
-        frame.normal[1].len(),
-        frame.normal[2].len(),
-        frame.block.len(),
-        frame.object.len(),
-    ];
+    let lengths = frame.plane_lengths();
     if lengths.iter().any(|&l| l != n) {
         let message = format!(
             "the frame is {}x{}, so every plane needs {n} samples; the planes (R G B A Z N.X N.Y N.Z id.block id.object) hold {lengths:?}",

@@ -86,6 +86,15 @@ impl Frame {
         self.alpha.is_empty()
     }
 
+    /// The number of samples in each plane, in EXR channel order
+    /// (`R G B A Z N.X N.Y N.Z id.block id.object`): all `width * height`
+    /// in a frame [`render`] made.
+    pub fn plane_lengths(&self) -> [usize; 10] {
+        let ([r, g, b], [nx, ny, nz]) = (&self.rgb, &self.normal);
+        let f = [r, g, b, &self.alpha, &self.depth, nx, ny, nz].map(Vec::len);
+        [f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], self.block.len(), self.object.len()]
+    }
+
     /// The pixel at index `k` of the planes (row `k / width`, column `k % width`).
     ///
     /// # Panics
