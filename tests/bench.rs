@@ -99,3 +99,45 @@ fn bench_runs_keep_the_fastest_and_the_median() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--runs must be between 1 and 1000, got 0"));
 }
+
+/// `scripts/bench-scaling.sh` end to end on two small grids: each round's
+/// growth is the ratio of the two per-ray costs it printed, and the summary
+/// lines are there. Bad arguments are refused with a message.
+#[test]
+fn scaling_script_prints_consistent_growth() {
+    let script = crate::support::root().join("scripts/bench-scaling.sh");
+    let run = |args: &[&str]| {
+        std::process::Command::new("bash")
+            .arg(&script)
+            .args(args)
+            .env("KOMPLEX", env!("CARGO_BIN_EXE_komplex"))
+            .output()
+            .expect("bash runs")
+    };
+    let out =
+        run(&["--small", "8", "--large", "64", "--width", "24", "--height", "18", "--rounds", "2", "--runs", "1"]);
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
+    let rounds: Vec<Vec<f64>> = text
+        .lines()
+        .filter(|l| l.starts_with(|c: char| c.is_ascii_digit()))
+        .map(|l| l.split_whitespace().map(|f| f.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rounds.len(), 2, "{text}");
+    for f in &rounds {
+        // round, small s, small rays, large s, large rays, growth
+        let want = (f[3] / f[4]) / (f[1] / f[2]);
+        assert!(f[1] > 0.0 && f[3] > 0.0, "{text}");
+        // The seconds are printed to the microsecond: compare loosely.
+        assert!((f[5] - want).abs() <= 0.05 * want + 0.5, "round {f:?}: growth {} but {want}", f[5]);
+    }
+    assert!(text.contains("growth per ray, fastest renders: "), "{text}");
+    assert!(text.contains("growth per ray, median of 2 rounds: "), "{text}");
+
+    let bad = run(&["--rounds", "0"]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("'0' is not a positive whole number"));
+    let bad = run(&["--frobnicate"]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("unknown argument '--frobnicate'"));
+}
