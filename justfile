@@ -21,6 +21,11 @@ bench-pov *ARGS:
 bench-scaling *ARGS:
     bash scripts/bench-scaling.sh {{ARGS}}
 
+# A profile-guided release build in target/pgo/release/komplex (needs
+# llvm-profdata; see the script). `--verify` checks its images are identical.
+build-pgo *ARGS:
+    bash scripts/build-pgo.sh {{ARGS}}
+
 fmt:
     cargo fmt --all
 
