@@ -780,7 +780,9 @@ impl Complex {
     /// interval reaching into `[0, T]` is among them. If none of those
     /// events qualifies, the next try reaches to the next interval end
     /// after `T`; after a few tries the full partition is formed. `out` is scratch: it
-    /// is left holding a prefix of the partition. Allocates only as
+    /// is left holding a prefix of the partition, or nothing (when at most
+    /// one block has intervals past ε the answer is read off that block's
+    /// intervals, and no partition is formed). Allocates only as
     /// [`Complex::partition_into`] does.
     pub fn first_interface(&self, ray: &Ray, out: &mut Partition) -> Option<Event> {
         let eps = self.epsilon;
@@ -798,6 +800,12 @@ impl Complex {
                         core::mem::swap(sets, previous);
                     }
                     let until = self.collect_sets_to_first_end(ray, after, sets, reuse.then_some(&*previous));
+                    if attempt == 0 && self.kernel.precision != quadric::Precision::Certified {
+                        if let Some(answer) = self.lone_interface(ray, sets) {
+                            out.clear();
+                            return answer;
+                        }
+                    }
                     self.partition_of_sets(ray, sets, cuts, until, out);
                     // Events are formed only up to `until`, where they are
                     // exact. With `until = ∞` nothing was cut off.
@@ -815,6 +823,45 @@ impl Complex {
                 found(out)
             }
         })
+    }
+
+    /// [`Complex::first_interface`] when at most one block has intervals
+    /// past ε (most rays of a glass scene: one leaving a glass body, one
+    /// seeing a single wall), read off that block's intervals without
+    /// forming the partition: `Some(answer)`, or `None` where the general
+    /// path must decide. With one block `B` the owners alternate between
+    /// nothing and `B`, each end is a change of owner (the intervals are
+    /// disjoint and never touch), and no change is within one medium; the
+    /// partition's event at an end `t > 0` is `B`'s entry or exit there if
+    /// the end is tagged with a solid, and none otherwise. So the answer is
+    /// the first end after ε: `None` if it is infinite (the ray stays in
+    /// `B`), the event formed exactly as `partition_of_sets` forms it if it
+    /// is tagged, the general path if it is not.
+    fn lone_interface(&self, ray: &Ray, sets: &Sets) -> Option<Option<Event>> {
+        let mut blocks = sets.iter().filter(|(_, ivs)| !ivs.is_empty());
+        let Some((block, intervals)) = blocks.next() else { return Some(None) };
+        if blocks.next().is_some() {
+            return None;
+        }
+        let eps = self.epsilon;
+        let (bound, entering) =
+            intervals.iter().flat_map(|iv| [(iv.enter, true), (iv.exit, false)]).find(|(b, _)| b.t > eps)?;
+        if !bound.t.is_finite() {
+            return Some(None);
+        }
+        let solid = bound.solid()?;
+        let point = self.hit_point(ray, bound.t, block, solid);
+        let (before, after) = if entering { (None, Some(block)) } else { (Some(block), None) };
+        Some(Some(Event {
+            t: bound.t,
+            point,
+            before,
+            after,
+            surface: Surface { block, solid },
+            entering,
+            normal: self.normal(block, solid, &point),
+            same_medium: false,
+        }))
     }
 
     /// Like [`Complex::collect_sets`] with no bound, but the walk stops at

@@ -274,6 +274,38 @@ fn no_nan_from_degenerate_queries() {
     assert_eq!(c.contains_point(&Point3::new(f64::NAN, 0.0, 0.0)), None);
 }
 
+/// `first_interface` with one block along the ray (read off its intervals,
+/// no partition formed) is the partition's first event strictly after ε,
+/// including when an end lies exactly at ε, or the ray starts inside.
+#[test]
+fn first_interface_with_one_block_is_the_first_end_after_epsilon() {
+    use crate::common::hs;
+    // The slab 1 <= x <= 3, along x from the origin, with ε = 1: the entry at
+    // t = ε is no interface, the exit at 3 is.
+    let slab = vec![hs(-1.0, 0.0, 0.0, 1.0), hs(1.0, 0.0, 0.0, -3.0)];
+    let block = |transparent| {
+        let opacity = if transparent { Opacity::Transparent } else { Opacity::Opaque };
+        Block::new("slab", slab.clone(), opacity, MaterialKey(0)).expect("valid")
+    };
+    for transparent in [false, true] {
+        for (eps, origin, want) in [
+            (1.0, 0.0, Some((3.0, false))),
+            (0.5, 0.0, Some((1.0, true))),
+            (0.5, 2.0, Some((1.0, false))),
+            (1.0, 2.0, None),
+            (0.0, 3.5, None),
+            (0.0, -1.0, Some((2.0, true))),
+        ] {
+            let c = Complex::new(vec![block(transparent)], ComplexOptions { epsilon: Some(eps) }).expect("valid");
+            let ray = Ray::new(Point3::new(origin, 0.0, 0.0), Vector3::x()).expect("ray");
+            let fi = c.first_interface(&ray, &mut complex::Partition::default());
+            assert_eq!(fi.map(|e| (e.t, e.entering)), want, "ε = {eps}, from x = {origin}");
+            let p = c.partition(&ray);
+            assert_eq!(fi, p.events.iter().find(|e| e.t > eps && !e.same_medium).copied());
+        }
+    }
+}
+
 /// A small bounded block (ball, capped tube or cube of size 0.1–0.5) placed
 /// at random in `[-3, 3]³`, opaque or transparent with one of two materials.
 fn small_block() -> impl Strategy<Value = Spec> {
