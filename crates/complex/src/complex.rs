@@ -916,6 +916,12 @@ impl Complex {
     /// them, and no events, for `until = -∞`).
     fn partition_of_sets(&self, ray: &Ray, sets: &mut Sets, cuts: &mut Vec<f64>, until: f64, out: &mut Partition) {
         out.clear();
+        // The segments alone (a shadow ray's query), with at most one block:
+        // they alternate between nothing and the block at its interval
+        // ends, read off directly (the cuts below would give the same).
+        if until == f64::NEG_INFINITY && lone_segments(sets, &mut out.segments) {
+            return;
+        }
         let gather = |sets: &Sets, cuts: &mut Vec<f64>| {
             cuts.clear();
             cuts.push(0.0);
@@ -1045,6 +1051,33 @@ impl Nearest {
             }
         }
     }
+}
+
+/// The segments of the partition when at most one block has intervals
+/// (sorted, disjoint, never touching, each ending after 0): empty space up
+/// to each entry after 0, the block up to its exit, empty space after the
+/// last finite exit. `false`, with `segments` untouched, for more blocks.
+fn lone_segments(sets: &Sets, segments: &mut Vec<Segment>) -> bool {
+    let mut blocks = sets.iter().filter(|(_, ivs)| !ivs.is_empty());
+    let lone = blocks.next();
+    if blocks.next().is_some() {
+        return false;
+    }
+    let mut cursor = 0.0;
+    if let Some((id, intervals)) = lone {
+        for iv in intervals {
+            if iv.enter.t > cursor {
+                segments.push(Segment { start: cursor, end: iv.enter.t, owner: None });
+                cursor = iv.enter.t;
+            }
+            segments.push(Segment { start: cursor, end: iv.exit.t, owner: Some(id) });
+            cursor = iv.exit.t;
+        }
+    }
+    if cursor < f64::INFINITY {
+        segments.push(Segment { start: cursor, end: f64::INFINITY, owner: None });
+    }
+    true
 }
 
 /// The owner among the blocks containing a point (in priority order):
