@@ -143,6 +143,14 @@ impl Sets {
         self.blocks.iter().map(|&(id, first, n)| (id, &self.intervals[first as usize..(first + n) as usize]))
     }
 
+    /// The one block with intervals, `Some(None)` if no block has any,
+    /// `None` if several have (the one-block shortcuts of the partition).
+    fn lone(&self) -> Option<Option<(BlockId, &[Interval])>> {
+        let mut blocks = self.iter().filter(|(_, ivs)| !ivs.is_empty());
+        let lone = blocks.next();
+        blocks.next().is_none().then_some(lone)
+    }
+
     /// Block `id`'s intervals, if it has any.
     fn get(&self, id: BlockId) -> Option<&[Interval]> {
         let k = self.blocks.binary_search_by_key(&id, |b| b.0).ok()?;
@@ -838,11 +846,7 @@ impl Complex {
     /// `B`), the event formed exactly as `partition_of_sets` forms it if it
     /// is tagged, the general path if it is not.
     fn lone_interface(&self, ray: &Ray, sets: &Sets) -> Option<Option<Event>> {
-        let mut blocks = sets.iter().filter(|(_, ivs)| !ivs.is_empty());
-        let Some((block, intervals)) = blocks.next() else { return Some(None) };
-        if blocks.next().is_some() {
-            return None;
-        }
+        let Some((block, intervals)) = sets.lone()? else { return Some(None) };
         let eps = self.epsilon;
         let (bound, entering) =
             intervals.iter().flat_map(|iv| [(iv.enter, true), (iv.exit, false)]).find(|(b, _)| b.t > eps)?;
@@ -1058,11 +1062,7 @@ impl Nearest {
 /// to each entry after 0, the block up to its exit, empty space after the
 /// last finite exit. `false`, with `segments` untouched, for more blocks.
 fn lone_segments(sets: &Sets, segments: &mut Vec<Segment>) -> bool {
-    let mut blocks = sets.iter().filter(|(_, ivs)| !ivs.is_empty());
-    let lone = blocks.next();
-    if blocks.next().is_some() {
-        return false;
-    }
+    let Some(lone) = sets.lone() else { return false };
     let mut cursor = 0.0;
     if let Some((id, intervals)) = lone {
         for iv in intervals {
