@@ -44,12 +44,7 @@ for v in "$width" "$height" "$rounds" "$runs" "$small" "$large" ${threads:+"$thr
     esac
 done
 
-if [ -n "${KOMPLEX:-}" ]; then
-    komplex="$KOMPLEX"
-else
-    cargo build --release --quiet
-    komplex="${CARGO_TARGET_DIR:-target}/release/komplex"
-fi
+source scripts/komplex-bin.sh
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 "$komplex" generate grid --count "$small" -o "$work/small.json"

@@ -34,13 +34,7 @@ while [ $# -gt 0 ]; do
 done
 
 command -v povray >/dev/null || { echo "povray is not installed (apt-get install povray)" >&2; exit 2; }
-# KOMPLEX=path/to/komplex measures that binary instead of building this checkout.
-if [ -n "${KOMPLEX:-}" ]; then
-    komplex="$KOMPLEX"
-else
-    cargo build --release --quiet
-    komplex="${CARGO_TARGET_DIR:-target}/release/komplex"
-fi
+source scripts/komplex-bin.sh
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
