@@ -232,7 +232,9 @@ impl Complex {
     }
 }
 
-/// `f` of either kind of solid at `x`, with its error bound and gradient.
+/// `f` of either kind of solid at `x`, with its error bound and gradient
+/// (inlined: the check of a candidate origin reads no gradient).
+#[inline(always)]
 fn eval(solid: &Solid, x: &Point3<f64>) -> Bounded {
     match solid {
         Solid::Quadric(q) => quadric_value(q, x),
@@ -271,13 +273,14 @@ const fn gamma(n: u32) -> f64 {
 /// axis-aligned surface (`A` or `n` with zeros) must not get a bound that
 /// ignores the other coordinates (that left acne on a floor `y = 0`).
 fn quadric_value(q: &Quadric, x: &Point3<f64>) -> Bounded {
-    let (c, a, w, k) = q.local_parts();
+    let (c, _, w, k) = q.local_parts();
+    let (a_norm, w_norm) = q.norms();
     let d = x - c;
-    let ad = a * d;
+    let ad = q.a_times(&d);
     let half = ad + w;
     let f = d.dot(&(half + w)) + k;
     let dn = d.norm();
-    let mag = (a.norm() * dn + 2.0 * w.norm()) * dn + k.abs();
+    let mag = (a_norm * dn + 2.0 * w_norm) * dn + k.abs();
     Bounded { f, err: gamma(12) * mag, gradient: 2.0 * half }
 }
 

@@ -54,6 +54,9 @@ pub struct Quadric {
     /// ellipsoid in normal form, whose products `A v` take three
     /// multiplications (see `Quadric::a_times`).
     diagonal: bool,
+    /// `‖A‖_F` and `|w|` of the stored parts, computed once: the magnitudes
+    /// an error bound of `f` needs at every point (see [`Quadric::norms`]).
+    norms: (f64, f64),
 }
 
 impl Quadric {
@@ -93,14 +96,25 @@ impl Quadric {
         let axis =
             if axis.iter().all(|x| x.is_finite()) && axis.amax() > 0.0 { axis / axis.amax() } else { Vector3::zeros() };
         let diagonal = (0..3).all(|i| (0..3).all(|j| i == j || a[(i, j)] == 0.0));
-        Quadric { centre, a, w, k, definite, flat: a.amax() / 16.0, axis, diagonal }
+        Quadric { centre, a, w, k, definite, flat: a.amax() / 16.0, axis, diagonal, norms: (a.norm(), w.norm()) }
     }
 
-    /// `A v`: for a diagonal `A` three products, the same values as the full
-    /// product (whose other six products are exact zeros; at most the sign of
-    /// a zero component can differ, which no decision reads).
+    /// `(‖A‖_F, |w|)` of the stored parts ([`Quadric::local_parts`]),
+    /// exactly `a.norm()` and `w.norm()`: the magnitudes from which callers
+    /// bound the rounding error of `f` at a point (as the secondary-ray
+    /// spawner of the `complex` crate does), without two square roots per
+    /// point.
+    #[inline]
+    pub fn norms(&self) -> (f64, f64) {
+        self.norms
+    }
+
+    /// `A v` with the stored `A` ([`Quadric::local_parts`]): for a diagonal
+    /// `A` three products, the same values as the full product (whose other
+    /// six products are exact zeros; at most the sign of a zero component
+    /// can differ, which no decision reads).
     #[inline(always)]
-    pub(crate) fn a_times(&self, v: &Vector3<f64>) -> Vector3<f64> {
+    pub fn a_times(&self, v: &Vector3<f64>) -> Vector3<f64> {
         if self.diagonal {
             Vector3::new(self.a.m11 * v.x, self.a.m22 * v.y, self.a.m33 * v.z)
         } else {
@@ -616,6 +630,19 @@ mod tests {
     use super::*;
 
     proptest::proptest! {
+        /// The cached norms are the stored parts' norms, through transforms
+        /// and complements (every constructor goes through
+        /// `with_definiteness`).
+        #[test]
+        fn norms_are_those_of_the_stored_parts(
+            q in proptest::prop_oneof![crate::strategies::quadric(), crate::strategies::elementary_quadric()],
+        ) {
+            for q in [q, q.complement()] {
+                let (_, a, w, _) = q.local_parts();
+                proptest::prop_assert_eq!(q.norms(), (a.norm(), w.norm()));
+            }
+        }
+
         /// The diagonal fast path (`Quadric::a_times`, the hit point's
         /// cross terms) answers exactly what the full product does.
         #[test]
