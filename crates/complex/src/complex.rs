@@ -27,6 +27,15 @@ pub struct ComplexOptions {
     pub epsilon: Option<f64>,
 }
 
+/// What [`Complex::occluded_with`] remembers between rays: the block that
+/// stopped the last one (none at first). Only a hint: any value gives the
+/// same answers.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Occluder {
+    /// BVH slot of the block.
+    slot: Option<u32>,
+}
+
 /// The first surface a ray meets.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
@@ -452,6 +461,16 @@ impl Complex {
     /// search, with no nearest-hit ordering and no normal. Meant for shadow
     /// rays, which need only a yes or no.
     pub fn occluded(&self, ray: &Ray, max_t: f64) -> bool {
+        self.occluded_with(ray, max_t, &mut Occluder::default())
+    }
+
+    /// [`Complex::occluded`], trying first the block that stopped the
+    /// previous ray given the same `occluder` (shadow rays of neighbouring
+    /// pixels towards one light are mostly stopped by the same block), and
+    /// remembering the one that stops this ray. The answer is exactly
+    /// `occluded`'s whatever `occluder` holds (the block tried first only
+    /// ends the search for an entry sooner); keep one per light and thread.
+    pub fn occluded_with(&self, ray: &Ray, max_t: f64, occluder: &mut Occluder) -> bool {
         if max_t.partial_cmp(&self.epsilon) != Some(core::cmp::Ordering::Greater) {
             return false;
         }
@@ -469,6 +488,7 @@ impl Complex {
         let mut run_end = eps;
         let mut found = false;
         let mut look = |spans: &[Interval], t_max: &mut f64| {
+            let mut enters = false;
             for iv in spans {
                 if iv.enter.t <= eps {
                     if eps < iv.exit.t {
@@ -476,17 +496,36 @@ impl Complex {
                     }
                 } else if iv.enter.t <= max_t {
                     found = true;
+                    enters = true;
                     *t_max = eps;
                 }
             }
+            enters
         };
         let mut t_max = max_t;
         let mut scratch = Spans::Empty;
+        // The block that stopped the previous ray: if it stops this one
+        // too, the walk below is the inside-probe only. (Looking at a block
+        // twice changes nothing: `look` only raises `run_end` and sets
+        // `found`.)
+        let tried = occluder.slot.filter(|&k| (k as usize) < self.kernel.len());
+        if let Some(k) = tried {
+            if !look(self.slot_spans(k, ray, &rb, &mut scratch), &mut t_max) {
+                occluder.slot = None;
+            }
+        }
         for i in self.unbounded_crossed(&rb, eps, max_t) {
             look(self.block_spans(i, ray, &rb, &mut scratch), &mut t_max);
         }
-        self.bvh
-            .traverse_any(&rb, eps, &mut t_max, |k, _, t_max| look(self.slot_spans(k, ray, &rb, &mut scratch), t_max));
+        let mut stopper = None;
+        self.bvh.traverse_any(&rb, eps, &mut t_max, |k, _, t_max| {
+            if look(self.slot_spans(k, ray, &rb, &mut scratch), t_max) && stopper.is_none() {
+                stopper = Some(k);
+            }
+        });
+        if tried.is_none() || occluder.slot.is_none() {
+            occluder.slot = stopper;
+        }
         if run_end > eps {
             return self.run_exit(ray, &rb, run_end, max_t).is_some();
         }

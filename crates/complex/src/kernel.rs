@@ -69,6 +69,12 @@ impl Kernel {
         kernel
     }
 
+    /// The number of slots (bounded blocks).
+    #[inline(always)]
+    pub(crate) fn len(&self) -> usize {
+        self.slots.len()
+    }
+
     /// The block in slot `k`.
     #[inline(always)]
     pub(crate) fn block(&self, k: u32) -> u32 {

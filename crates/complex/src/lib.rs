@@ -20,7 +20,7 @@ mod spawn;
 
 pub use block::{Block, BlockId, MaterialKey, Opacity};
 pub use bounds::Aabb;
-pub use complex::{Complex, ComplexOptions, Hit, DEFAULT_RELATIVE_EPSILON};
+pub use complex::{Complex, ComplexOptions, Hit, Occluder, DEFAULT_RELATIVE_EPSILON};
 pub use error::ComplexError;
 pub use partition::{Event, Partition, Segment, Surface};
 pub use quadric::Precision;

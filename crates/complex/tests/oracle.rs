@@ -233,8 +233,13 @@ proptest! {
             if let Some(t) = first {
                 limits.extend([t, 0.5 * t, 2.0 * t, t * (1.0 - f64::EPSILON)]);
             }
+            let mut occluder = complex::Occluder::default();
             for m in limits {
-                prop_assert_eq!(c.occluded(ray, m), first.is_some_and(|t| t <= m), "max_t = {}", m);
+                let want = first.is_some_and(|t| t <= m);
+                prop_assert_eq!(c.occluded(ray, m), want, "max_t = {}", m);
+                // The hint of the previous limit, then of this one.
+                prop_assert_eq!(c.occluded_with(ray, m, &mut occluder), want, "max_t = {}, carried hint", m);
+                prop_assert_eq!(c.occluded_with(ray, m, &mut occluder), want, "max_t = {}, own hint", m);
             }
 
             // Sampled membership: per-block sets, partition owner, contains_point.
@@ -306,6 +311,35 @@ fn first_interface_with_one_block_is_the_first_end_after_epsilon() {
     }
 }
 
+/// The hint of `occluded_with`: kept while the same block stops the rays,
+/// dropped by a ray nothing stops, and never a different answer.
+#[test]
+fn occluder_remembers_the_block_that_stopped_the_last_ray() {
+    let ball = |x: f64| {
+        let at = quadric::Transform::translate(Vector3::new(x, 0.0, 0.0)).expect("finite");
+        Block::new("ball", vec![Solid::from(Quadric::sphere().transformed(&at))], Opacity::Opaque, MaterialKey(0))
+            .expect("valid")
+    };
+    let c = Complex::new(vec![ball(-4.0), ball(4.0)], ComplexOptions::default()).expect("valid");
+    let towards = |x: f64, y: f64| Ray::new(Point3::new(x, y, -5.0), Vector3::z()).expect("ray");
+    let mut occluder = complex::Occluder::default();
+    assert!(c.occluded_with(&towards(4.0, 0.0), 10.0, &mut occluder));
+    let first = occluder;
+    assert_ne!(first, complex::Occluder::default(), "the blocker is remembered");
+    // Stopped by the same ball: the hint stays.
+    assert!(c.occluded_with(&towards(4.2, 0.1), 10.0, &mut occluder));
+    assert_eq!(occluder, first);
+    // Stopped by the other ball: the hint moves to it.
+    assert!(c.occluded_with(&towards(-4.0, 0.0), 10.0, &mut occluder));
+    assert_ne!(occluder, first);
+    assert_ne!(occluder, complex::Occluder::default());
+    // Too short to reach it, then missing both: no answer changes, and a ray
+    // nothing stops drops the hint.
+    assert!(!c.occluded_with(&towards(-4.0, 0.0), 3.0, &mut occluder));
+    assert!(!c.occluded_with(&towards(0.0, 0.0), 10.0, &mut occluder));
+    assert_eq!(occluder, complex::Occluder::default());
+}
+
 /// A small bounded block (ball, capped tube or cube of size 0.1–0.5) placed
 /// at random in `[-3, 3]³`, opaque or transparent with one of two materials.
 fn small_block() -> impl Strategy<Value = Spec> {
@@ -346,6 +380,7 @@ proptest! {
         let specs: Vec<Spec> =
             specs.into_iter().map(|(s, t, m)| (s, t && !all_opaque, m)).collect();
         let c = build(&specs);
+        let mut occluder = complex::Occluder::default();
         for ray in &rays {
             let brute = brute_first(&c, ray);
             let hit = c.cast_ray(ray, f64::INFINITY);
@@ -354,7 +389,12 @@ proptest! {
                 prop_assert_eq!(Some(h.block), if h.entering { after } else { before });
             }
             for m in [f64::INFINITY, 1.0, 4.0, brute.map_or(1.0, |b| b.0)] {
-                prop_assert_eq!(c.occluded(ray, m), brute.is_some_and(|b| b.0 <= m), "max_t = {}", m);
+                let want = brute.is_some_and(|b| b.0 <= m);
+                prop_assert_eq!(c.occluded(ray, m), want, "max_t = {}", m);
+                // With the hint of the previous ray (another ray's blocker,
+                // or none), then with this ray's own blocker as the hint.
+                prop_assert_eq!(c.occluded_with(ray, m, &mut occluder), want, "max_t = {}, carried hint", m);
+                prop_assert_eq!(c.occluded_with(ray, m, &mut occluder), want, "max_t = {}, own hint", m);
             }
             let events: Vec<_> = c.partition(ray).events.iter().map(|e| (e.t, e.before, e.after)).collect();
             prop_assert_eq!(events, brute_events(&c, ray));

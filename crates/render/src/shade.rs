@@ -47,9 +47,17 @@ struct Event {
 #[derive(Debug, Default)]
 pub struct Scratch {
     partition: Partition,
+    /// The block that stopped the last shadow ray, per light (modulo
+    /// [`OCCLUDERS`]) and for camera or secondary hits apart: tried first
+    /// by the next such shadow ray (`Complex::occluded_with`).
+    occluders: [[complex::Occluder; 2]; OCCLUDERS],
     /// Rays cast so far (primary, shadow, reflected, refracted).
     pub rays: u64,
 }
+
+/// Lights with a shadow-ray hint of their own in [`Scratch`]; further
+/// lights share them (a hint never changes an answer).
+const OCCLUDERS: usize = 8;
 
 /// Secondary rays whose colour would be scaled by less than this (the
 /// product of the `reflect`/`transmit` factors along their path, largest
@@ -191,7 +199,7 @@ impl<'w> Shader<'w> {
         let wants_diffuse = !is_zero(&mat.diffuse);
         let wants_specular = !is_zero(&mat.specular);
         if wants_diffuse || wants_specular {
-            for light in &world.lights {
+            for (index, light) in world.lights.iter().enumerate() {
                 let to_light = light.position - e.point;
                 let dist = to_light.norm();
                 if dist.is_nan() || dist <= 0.0 {
@@ -202,7 +210,8 @@ impl<'w> Shader<'w> {
                 if nl <= 0.0 {
                     continue;
                 }
-                let pass = self.transmittance(&mut spawner, &l, dist, scratch);
+                let hint = (index % OCCLUDERS, usize::from(depth > 0));
+                let pass = self.transmittance(&mut spawner, &l, dist, hint, scratch);
                 if is_zero(&pass) {
                     continue;
                 }
@@ -264,7 +273,14 @@ impl<'w> Shader<'w> {
     /// origin: no acne however far the surface is): zero if an opaque block is in the way, else the
     /// product of the `transmit` of each transparent medium crossed (once
     /// per passage).
-    fn transmittance(&self, spawner: &mut Spawner, l: &Vector3<f64>, dist: f64, scratch: &mut Scratch) -> Rgb {
+    fn transmittance(
+        &self,
+        spawner: &mut Spawner,
+        l: &Vector3<f64>,
+        dist: f64,
+        (light, secondary): (usize, usize),
+        scratch: &mut Scratch,
+    ) -> Rgb {
         let one = Vector3::repeat(1.0);
         if !self.world.settings.shadows {
             return one;
@@ -273,7 +289,8 @@ impl<'w> Shader<'w> {
         scratch.rays += 1;
         if !self.transparent {
             // Any blocker will do: an any-hit query, no nearest-hit ordering.
-            return if self.complex.occluded(&ray, dist) { Vector3::zeros() } else { one };
+            let occluder = &mut scratch.occluders[light][secondary];
+            return if self.complex.occluded_with(&ray, dist, occluder) { Vector3::zeros() } else { one };
         }
         // The media crossed are in the segments; no event (hit point, normal) is needed.
         self.complex.segments_into(&ray, &mut scratch.partition);
