@@ -173,10 +173,7 @@ impl Block {
     #[inline(always)]
     pub(crate) fn spans_into(&self, ray: &Ray, out: &mut Spans) {
         if self.convex {
-            let solids = self.solids.iter().map(|s| match s {
-                Solid::HalfSpace(h) => SolidRef::HalfSpace(h),
-                Solid::Quadric(q) => SolidRef::Quadric(q),
-            });
+            let solids = self.solids.iter().map(SolidRef::from);
             if let Some(spans) = convex_spans(ray, solids, self.precision) {
                 *out = spans;
                 return;
@@ -410,10 +407,19 @@ fn adjacent(x: f64, up: bool) -> f64 {
 }
 
 /// A solid of a block, wherever it is stored.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 pub(crate) enum SolidRef<'a> {
     HalfSpace(&'a HalfSpace),
     Quadric(&'a Quadric),
+}
+
+impl<'a> From<&'a Solid> for SolidRef<'a> {
+    fn from(s: &'a Solid) -> Self {
+        match s {
+            Solid::HalfSpace(h) => SolidRef::HalfSpace(h),
+            Solid::Quadric(q) => SolidRef::Quadric(q),
+        }
+    }
 }
 
 /// The intervals of a block of convex solids, given in block order: the

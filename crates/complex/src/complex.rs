@@ -84,6 +84,10 @@ pub struct Complex {
     bvh: Bvh,
     /// The bounded blocks' solids packed in the BVH's leaf order.
     kernel: Kernel,
+    /// Each block's slot in `kernel` (`u32::MAX`: none, an unbounded or
+    /// empty block): the spawner reads a hit's solid from the packed copy
+    /// the ray test just read, not from the block's own heap buffer.
+    slot_of: Vec<u32>,
     /// Blocks with an infinite box: tested for every ray.
     unbounded: Vec<u32>,
     epsilon: f64,
@@ -224,8 +228,12 @@ impl Complex {
         });
         let bvh = Bvh::build(&bounded);
         let kernel = Kernel::new(bvh.items(), &blocks);
+        let mut slot_of = vec![u32::MAX; blocks.len()];
+        for k in 0..kernel.len() as u32 {
+            slot_of[kernel.block(k) as usize] = k;
+        }
         let any_transparent = blocks.iter().any(Block::is_transparent);
-        Ok(Complex { blocks, boxes, bvh, kernel, unbounded, epsilon, any_transparent })
+        Ok(Complex { blocks, boxes, bvh, kernel, slot_of, unbounded, epsilon, any_transparent })
     }
 
     /// The precision mode of the kernel every query uses (default
@@ -265,6 +273,14 @@ impl Complex {
     /// Whether any block is transparent.
     pub fn has_transparent(&self) -> bool {
         self.any_transparent
+    }
+
+    /// Solid `solid` of block `id`: the packed copy if the block has one,
+    /// else the block's own; `None` if either index is out of range.
+    pub(crate) fn solid_ref(&self, id: BlockId, solid: u32) -> Option<SolidRef<'_>> {
+        let slot = self.slot_of.get(id.index()).filter(|&&k| k != u32::MAX);
+        let packed = slot.and_then(|&k| self.kernel.solid(k, solid));
+        packed.or_else(|| self.blocks.get(id.index())?.solids().get(solid as usize).map(SolidRef::from))
     }
 
     /// The box of one block: conservative (it holds every point of the

@@ -34,6 +34,8 @@
 use quadric::nalgebra::{Point3, Vector3};
 use quadric::{GeometryError, HalfSpace, Quadric, Ray, Solid};
 
+use crate::block::SolidRef;
+
 use crate::{Complex, Hit, Surface};
 
 /// The spawned origin's `f` must have the right sign by this many times the
@@ -79,9 +81,9 @@ impl Complex {
         point: &Point3<f64>,
         direction: &Vector3<f64>,
     ) -> Result<Ray, GeometryError> {
-        let solid = self.blocks().get(surface.block.index()).and_then(|b| b.solids().get(surface.solid as usize));
+        let solid = self.solid_ref(surface.block, surface.solid);
         match solid {
-            Some(s) if point.iter().all(|c| c.is_finite()) => Ray::new(spawn_origin(s, point, direction), *direction),
+            Some(s) if point.iter().all(|c| c.is_finite()) => Ray::new(origin_from(s, point, direction), *direction),
             _ => Ray::new(*point, *direction),
         }
     }
@@ -100,6 +102,11 @@ impl Complex {
 /// the last candidate if no doubling satisfies the check (only for points
 /// far from the surface or near overflow).
 pub fn spawn_origin(solid: &Solid, point: &Point3<f64>, direction: &Vector3<f64>) -> Point3<f64> {
+    origin_from(SolidRef::from(solid), point, direction)
+}
+
+/// [`spawn_origin`] for a solid wherever it is stored.
+fn origin_from(solid: SolidRef, point: &Point3<f64>, direction: &Vector3<f64>) -> Point3<f64> {
     match Prepared::at(solid, point, None) {
         Some(p) => match p.side(direction) {
             Some(sigma) => p.offset(solid, point, sigma),
@@ -125,7 +132,7 @@ impl Prepared {
     /// `normal`: the unit normal at `point` if the caller has it (either
     /// orientation; it is turned along the gradient), else it is computed
     /// from the gradient, `normal::unit(∇f)` as [`Solid::normal`] does.
-    fn at(solid: &Solid, point: &Point3<f64>, normal: Option<&Vector3<f64>>) -> Option<Prepared> {
+    fn at(solid: SolidRef, point: &Point3<f64>, normal: Option<&Vector3<f64>>) -> Option<Prepared> {
         let Bounded { f, err, gradient } = eval(solid, point);
         let n = match normal {
             Some(n) if n.iter().any(|c| *c != 0.0) && n.iter().all(|c| c.is_finite()) => {
@@ -152,7 +159,7 @@ impl Prepared {
     }
 
     /// The origin on side `sigma`.
-    fn offset(&self, solid: &Solid, point: &Point3<f64>, sigma: f64) -> Point3<f64> {
+    fn offset(&self, solid: SolidRef, point: &Point3<f64>, sigma: f64) -> Point3<f64> {
         let Prepared { f, err, g, n, rounding } = *self;
         // Along the normal line `x(β) = p̂ + βn̂`, `f(x(β)) = f(p̂) + β|∇f| + β²n̂ᵀAn̂`:
         // to first order the sign we want is reached at `β = (σf + M·err)/|∇f|`
@@ -182,7 +189,7 @@ impl Prepared {
 /// [`Complex::spawn_ray`]'s. From [`Complex::spawner`].
 #[derive(Debug)]
 pub struct Spawner<'c> {
-    solid: Option<&'c Solid>,
+    solid: Option<SolidRef<'c>>,
     point: Point3<f64>,
     /// The unit normal at `point`, when the caller knew it.
     normal: Option<Vector3<f64>>,
@@ -213,7 +220,7 @@ impl Complex {
     /// A [`Spawner`] for the hit `point` on `surface`: many secondary rays
     /// from one point, each equal to [`Complex::spawn_ray`]'s.
     pub fn spawner(&self, surface: Surface, point: &Point3<f64>) -> Spawner<'_> {
-        let solid = self.blocks().get(surface.block.index()).and_then(|b| b.solids().get(surface.solid as usize));
+        let solid = self.solid_ref(surface.block, surface.solid);
         let finite = point.iter().all(|c| c.is_finite());
         Spawner { solid: solid.filter(|_| finite), point: *point, normal: None, prepared: None, origins: [None; 2] }
     }
@@ -235,10 +242,10 @@ impl Complex {
 /// `f` of either kind of solid at `x`, with its error bound and gradient
 /// (inlined: the check of a candidate origin reads no gradient).
 #[inline(always)]
-fn eval(solid: &Solid, x: &Point3<f64>) -> Bounded {
+fn eval(solid: SolidRef, x: &Point3<f64>) -> Bounded {
     match solid {
-        Solid::Quadric(q) => quadric_value(q, x),
-        Solid::HalfSpace(h) => half_space_value(h, x),
+        SolidRef::Quadric(q) => quadric_value(q, x),
+        SolidRef::HalfSpace(h) => half_space_value(h, x),
     }
 }
 
