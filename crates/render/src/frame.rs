@@ -195,7 +195,7 @@ thread_local! {
 
 /// Renders the run of rows from `i0` on (see [`render_rows`]) into `out`,
 /// through the worker's [`TASK_PIXELS`].
-fn render_run(world: &World, i0: u32, out: &mut Run) -> u64 {
+fn render_run(shader: &Shader, i0: u32, out: &mut Run) -> u64 {
     let n = out.len();
     let mut fresh = Vec::new();
     TASK_PIXELS.with(|buf| {
@@ -204,7 +204,7 @@ fn render_run(world: &World, i0: u32, out: &mut Run) -> u64 {
         if buf.len() < n {
             buf.resize(n, Pixel::default());
         }
-        let rays = render_rows(world, i0, &mut buf[..n]);
+        let rays = render_rows(shader, i0, &mut buf[..n]);
         out.fill(&buf[..n]);
         rays
     })
@@ -304,6 +304,8 @@ pub fn render_until(
     let width = world.camera.width() as usize;
     let mut frame = Frame::zeroed(world.camera.width(), world.camera.height());
     let runs = frame.runs_mut(width * ROWS);
+    // One shader for the frame (its material table is built once).
+    let shader = Shader::new(world);
     let rays: u64 = pool.install(|| {
         runs.into_par_iter()
             // Every pair of rows its own task: rows differ in cost by orders
@@ -316,7 +318,7 @@ pub fn render_until(
                 if cancel.load(Ordering::Relaxed) {
                     return 0;
                 }
-                let rays = render_run(world, (b * ROWS) as u32, &mut out);
+                let rays = render_run(&shader, (b * ROWS) as u32, &mut out);
                 for _ in 0..out.len() / width {
                     progress();
                 }
@@ -337,8 +339,8 @@ const ROWS: usize = 2;
 
 /// Renders the rows from `i0` on into `out` (one or two whole rows),
 /// returning the rays cast.
-fn render_rows(world: &World, i0: u32, out: &mut [Pixel]) -> u64 {
-    let shader = Shader::new(world);
+fn render_rows(shader: &Shader, i0: u32, out: &mut [Pixel]) -> u64 {
+    let world = shader.world();
     let mut scratch = Scratch::default();
     let cam = &world.camera;
     let width = cam.width() as usize;
@@ -346,7 +348,7 @@ fn render_rows(world: &World, i0: u32, out: &mut [Pixel]) -> u64 {
     if n > 1 {
         for (di, row) in out.chunks_exact_mut(width).enumerate() {
             for (j, pixel) in (0..cam.width()).zip(row.iter_mut()) {
-                *pixel = supersampled(&shader, &mut scratch, cam, i0 + di as u32, j, n);
+                *pixel = supersampled(shader, &mut scratch, cam, i0 + di as u32, j, n);
             }
         }
         return scratch.rays;
