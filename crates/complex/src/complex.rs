@@ -30,6 +30,21 @@ pub struct ComplexOptions {
 /// What [`Complex::occluded_with`] remembers between rays: the block that
 /// stopped the last one (none at first). Only a hint: any value gives the
 /// same answers.
+///
+/// ```
+/// use complex::{Block, Complex, ComplexOptions, MaterialKey, Occluder, Opacity};
+/// use quadric::nalgebra::{Point3, Vector3};
+/// use quadric::{Quadric, Ray, Solid};
+/// let ball = Block::new("ball", vec![Solid::from(Quadric::sphere())], Opacity::Opaque, MaterialKey(0)).unwrap();
+/// let scene = Complex::new(vec![ball], ComplexOptions::default()).unwrap();
+/// // Shadow rays of neighbouring points towards one light, one hint for all.
+/// let mut hint = Occluder::default();
+/// for x in [-0.2, -0.1, 0.0, 0.1, 0.2] {
+///     let shadow = Ray::new(Point3::new(x, 0.0, -5.0), Vector3::z()).unwrap();
+///     assert!(scene.occluded_with(&shadow, 10.0, &mut hint));
+///     assert_eq!(scene.occluded_with(&shadow, 10.0, &mut hint), scene.occluded(&shadow, 10.0));
+/// }
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Occluder {
     /// BVH slot of the block.
