@@ -10,7 +10,7 @@
 //! first interface.
 #![no_main]
 
-use complex::{Block, BlockId, Complex, ComplexError, ComplexOptions, MaterialKey, Opacity, Partition};
+use complex::{Block, BlockId, Complex, ComplexError, ComplexOptions, MaterialKey, Occluder, Opacity, Partition};
 use komplex_fuzz::{bound, BlockSpec, ComplexInput};
 use libfuzzer_sys::fuzz_target;
 use quadric::nalgebra::Point3;
@@ -148,6 +148,9 @@ fuzz_target!(|input: ComplexInput| {
     for p in &input.points {
         check_point(&c, &p.point(), accurate);
     }
+    // Carried from cast to cast, as the renderer carries it between the
+    // shadow rays of one light: any hint gives `occluded`'s answers.
+    let mut occluder = Occluder::default();
     for cast in &input.casts {
         let Ok(ray) = cast.ray.build() else { continue };
         // The BVH and box culling against every block.
@@ -181,6 +184,15 @@ fuzz_target!(|input: ComplexInput| {
         let partition = check_partition(&c, &ray, &sets);
         check_cast(&c, &ray, cast.max_t.value(), &partition, accurate);
         check_cast(&c, &ray, f64::INFINITY, &partition, accurate);
+
+        // `occluded` is `cast_ray(..).is_some()`, with or without the hint
+        // of the previous cast, and with this cast's own blocker as the hint.
+        for max_t in [cast.max_t.value(), f64::INFINITY] {
+            let stopped = c.cast_ray(&ray, max_t).is_some();
+            assert_eq!(c.occluded(&ray, max_t), stopped, "occluded(max_t = {max_t})");
+            assert_eq!(c.occluded_with(&ray, max_t, &mut occluder), stopped, "occluded_with, carried hint");
+            assert_eq!(c.occluded_with(&ray, max_t, &mut occluder), stopped, "occluded_with, own hint");
+        }
 
         // The partition's segments alone (shadow rays), and its first
         // interface formed from a bounded partition (camera rays).

@@ -351,7 +351,9 @@ fn core(q: &quadric::Quadric) -> Option<Core> {
         let v = eigenvectors.column(i);
         p += v * v.transpose() / eigenvalues[i];
     }
-    let (d0, spread) = if l0.abs() <= tol {
+    // `linear`: what a linear term along the axis adds to both `r` and the
+    // spread (below); zero for a cone or hyperboloid, whose `d0` absorbs it.
+    let (d0, spread, linear) = if l0.abs() <= tol {
         if w.dot(&axis).abs() > 1e-9 * w.norm() {
             return None; // a parabolic cylinder: left to propagation
         }
@@ -362,12 +364,21 @@ fn core(q: &quadric::Quadric) -> Option<Core> {
         // the spread covers the most negative one it may be.
         let diagonal = a[(0, 1)] == 0.0 && a[(0, 2)] == 0.0 && a[(1, 2)] == 0.0;
         let noise = if diagonal { 0.0 } else { 64.0 * f64::EPSILON * top };
-        (-(p * w), (noise - l0).max(0.0))
+        // A linear term `2·lin·s` along the axis, however small against
+        // `w`, moves the cross-section's level without bound far along it
+        // (an elliptic paraboloid: a coefficient of 1e-45 at 1e48 from the
+        // centre is a level of 1e3), so it is kept, folded in by
+        // `2|lin·s| <= |lin|(1 + s²)`: `r` and the spread each grow by
+        // `|lin|`, plus the rounding of the computed axis for a
+        // non-diagonal `A`. (With the axis unbounded, the spread then
+        // leaves the box open across it, as the paraboloid is.)
+        let linear = w.dot(&axis).abs() + if diagonal { 0.0 } else { 64.0 * f64::EPSILON * w.norm() };
+        (-(p * w), (noise - l0).max(0.0) + linear, linear)
     } else {
         // One negative direction: a cone or a hyperboloid around the axis.
-        (-(p * w) - axis * (axis.dot(&w) / l0), -l0)
+        (-(p * w) - axis * (axis.dot(&w) / l0), -l0, 0.0)
     };
-    let r = -(k + w.dot(&d0));
+    let r = linear - (k + w.dot(&d0));
     let scale = k.abs() + w.dot(&d0).abs();
     let r = r + margin * scale;
     let spread = spread * (1.0 + margin);

@@ -103,6 +103,34 @@ fn unbounded_and_empty_blocks() {
     assert_eq!(c.cast_ray(&ray([3.0, 1.0, 2.0], [-1.0, 0.0, 0.0]), f64::INFINITY).map(|h| h.t), Some(3.0));
 }
 
+/// An elliptic paraboloid whose linear coefficient along its axis is tiny
+/// against the others (1e-45 after a scale of 1e46 along z), far from its
+/// centre: once boxed as the cylinder of its cross-section at the centre,
+/// which cut off most of the solid (found by `fuzz-kernel`). Its box must
+/// hold its points, and `contains_point` must find them; capped, the box is
+/// bounded again and still holds the points.
+#[test]
+fn paraboloid_with_a_tiny_linear_term_far_along_its_axis() {
+    let q = Quadric::from_coefficients([485.890625, 1.890625, 0.0, 0.0, 0.0, 0.0, 3.0, 0.0, 1.0, 0.0])
+        .expect("finite")
+        .transformed(&Transform::translate(Vector3::new(0.0, 0.0, 484.0)).expect("finite"))
+        .transformed(&Transform::scale_xyz(Vector3::new(-122.00000000000172, 485.890625, 1.0794e46)).expect("finite"));
+    let inside = [Point3::new(4.03125, 127.0, 0.0), Point3::new(150.0, -2000.0, -1e47)];
+    for p in &inside {
+        assert!(q.value(p) < 0.0, "{p:?} is inside");
+    }
+    let open = box_of(vec![Solid::from(q)]);
+    let capped = box_of(vec![Solid::from(q), hs(0.0, 0.0, -1.0, -2e47)]);
+    assert!(capped.is_bounded(), "{capped:?}");
+    for (bx, solids) in [(open, vec![Solid::from(q)]), (capped, vec![Solid::from(q), hs(0.0, 0.0, -1.0, -2e47)])] {
+        let c = complex(vec![block("p", solids.clone(), O, 0)]);
+        for p in &inside {
+            assert!(bx.contains_point(p), "{bx:?} misses {p:?}");
+            assert_eq!(c.contains_point(p), Some(complex::BlockId(0)), "{p:?}");
+        }
+    }
+}
+
 /// A bounded base shape (ball, capped tube, cone nappe, cube, capped
 /// paraboloid) under a random transform, with up to two random solids more.
 fn bounded_block() -> impl Strategy<Value = Vec<Solid>> {
