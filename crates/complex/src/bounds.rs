@@ -691,8 +691,16 @@ fn narrow_quadric(bx: &mut Aabb, q: &quadric::Quadric) {
         let aii = a[(i, i)];
         // The magnitude the bound was computed from, for the rounding margin.
         let (lo, hi, scale) = if aii > 0.0 {
+            // The discriminant grown by what rounding may hide in it, and in
+            // `f` wherever it is evaluated (`aᵢᵢ` times a few ulps of the
+            // terms of `f` at a root, of sizes `|C|` and `B²/aᵢᵢ`): near a
+            // double root the roots then move by `sqrt(δ)/aᵢᵢ`, not by a
+            // multiple of their scale (a parabola whose vertex dips 1e-18
+            // below zero from terms of 1.16, where the computed `f` is
+            // negative 2 units either side of the exact roots).
             let roots = |bb: f64| {
-                let disc = bb * bb - aii * clo;
+                let delta = 64.0 * f64::EPSILON * (bb * bb + aii * cmag);
+                let disc = bb * bb - aii * clo + delta;
                 (disc >= 0.0).then(|| {
                     let s = disc.sqrt();
                     ((-bb - s) / aii, (-bb + s) / aii)

@@ -131,6 +131,31 @@ fn paraboloid_with_a_tiny_linear_term_far_along_its_axis() {
     }
 }
 
+/// A slab `a x² + 2g x + k <= 0` whose vertex dips 1e-18 below zero from
+/// terms of about 1.16, 7.7e7 from the centre (a case `fuzz-kernel` found):
+/// the computed `f` is negative some units either side of the exact roots,
+/// and every point where it is must be in the box and found by
+/// `contains_point`. (The box's margin was a multiple of the roots' scale,
+/// 0.15 here, where near a double root rounding moves them by `sqrt(δ)/a`.)
+#[test]
+fn slab_of_a_nearly_tangent_quadric_holds_every_point_computed_inside() {
+    let (a, g, k) = (1.9432328745988104e-16, -1.5019182485790364e-8, 1.16082763671875);
+    let q = Quadric::from_coefficients([a, 0.0, 0.0, 0.0, 0.0, 0.0, g, 0.0, 0.0, k]).expect("finite");
+    let bx = box_of(vec![Solid::from(q)]);
+    let c = complex(vec![block("slab", vec![Solid::from(q)], O, 0)]);
+    let vertex = -g / a;
+    let mut inside = 0;
+    for step in -80..=80 {
+        let p = Point3::new(vertex + 0.25 * f64::from(step), 0.5, -2.0);
+        if q.value(&p) <= 0.0 {
+            inside += 1;
+            assert!(bx.contains_point(&p), "{bx:?} misses {p:?}, where f = {}", q.value(&p));
+            assert_eq!(c.contains_point(&p), Some(complex::BlockId(0)), "{p:?}");
+        }
+    }
+    assert!(inside > 2, "the sampled points should include some the computed f puts inside");
+}
+
 /// A bounded base shape (ball, capped tube, cone nappe, cube, capped
 /// paraboloid) under a random transform, with up to two random solids more.
 fn bounded_block() -> impl Strategy<Value = Vec<Solid>> {
