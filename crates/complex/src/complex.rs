@@ -540,11 +540,7 @@ impl Complex {
         // twice changes nothing: `look` only raises `run_end` and sets
         // `found`.)
         let tried = occluder.slot.filter(|&k| (k as usize) < self.kernel.len());
-        if let Some(k) = tried {
-            if !look(self.slot_spans(k, ray, &rb, &mut scratch), &mut t_max) {
-                occluder.slot = None;
-            }
-        }
+        let hint_stops = tried.is_some_and(|k| look(self.slot_spans(k, ray, &rb, &mut scratch), &mut t_max));
         for i in self.unbounded_crossed(&rb, eps, max_t) {
             look(self.block_spans(i, ray, &rb, &mut scratch), &mut t_max);
         }
@@ -554,9 +550,8 @@ impl Complex {
                 stopper = Some(k);
             }
         });
-        if tried.is_none() || occluder.slot.is_none() {
-            occluder.slot = stopper;
-        }
+        // Keep the hint while it stops the rays, else the block that did.
+        occluder.slot = if hint_stops { tried } else { stopper };
         if run_end > eps {
             return self.run_exit(ray, &rb, run_end, max_t).is_some();
         }

@@ -98,10 +98,10 @@ impl<'w> Shader<'w> {
     pub fn new(world: &'w World) -> Self {
         let complex = &world.complex;
         let uniform = |info: &crate::scene::BlockInfo| {
-            let all = info.solid_materials.iter().all(|&m| m == info.material);
-            all.then(|| u32::try_from(info.material).ok().filter(|&m| m != u32::MAX)).flatten()
+            let same = info.solid_materials.iter().all(|&m| m == info.material);
+            u32::try_from(info.material).ok().filter(|&m| same && m != u32::MAX).unwrap_or(u32::MAX)
         };
-        let surface_materials = world.blocks.iter().map(|info| uniform(info).unwrap_or(u32::MAX)).collect();
+        let surface_materials = world.blocks.iter().map(uniform).collect();
         Shader { world, complex, eps: complex.epsilon(), transparent: complex.has_transparent(), surface_materials }
     }
 
