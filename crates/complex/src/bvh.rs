@@ -5,8 +5,11 @@
 //! the boxes of its (up to) four children lane by lane, so one step tests all
 //! four with a few `f64x4` operations (the `wide` crate: AVX where the
 //! target has it, plain arrays elsewhere) and reads 256 bytes from four
-//! adjacent cache lines; half as many levels as the binary tree. Traversed
-//! front to back with a fixed-size stack, so a query never allocates.
+//! adjacent cache lines; half as many levels as the binary tree. Scenes of
+//! [`EIGHT_WIDE_FROM`] bounded blocks or more get eight-wide nodes (two
+//! `f64x4` per axis and side, 448 bytes): a third fewer levels, each node
+//! read a cost that pays only once the tree is deep. Traversed front to back
+//! with a fixed-size stack, so a query never allocates.
 //! (`f32` boxes rounded outwards, and a scalar four-wide tree, were measured
 //! too and did not pay, see `docs/benchmarks.md`.)
 
@@ -28,11 +31,15 @@ const PARALLEL_FROM: usize = 4096;
 /// Depth limit of the binary build; the builder makes a leaf before a
 /// subtree could get deeper than this.
 const MAX_DEPTH: usize = 64;
-/// Traversal stack size: the four-wide tree is at most `MAX_DEPTH / 2` deep
-/// (see [`Bvh::collapse`]), and a step takes one entry and leaves at most
-/// four (`walk` keeps one of them aside as the next, which only lowers the
-/// count), so the stack holds at most `3 · depth + 1` entries.
-const STACK: usize = 3 * MAX_DEPTH.div_ceil(2) + 1;
+/// Traversal stack size: the wide tree is at most `MAX_DEPTH / 2` deep
+/// (see [`Tree::collapse`]), and a step takes one entry and leaves at most
+/// eight (`walk` keeps one of them aside as the next, which only lowers the
+/// count), so the stack holds at most `7 · depth + 1` entries.
+const STACK: usize = 7 * MAX_DEPTH.div_ceil(2) + 1;
+/// From this many bounded blocks on, the tree is eight-wide (see the module
+/// documentation and `docs/benchmarks.md`: below it the wider node costs
+/// small scenes more than the levels it saves).
+pub(crate) const EIGHT_WIDE_FROM: usize = 512;
 
 /// A node of the binary build: its box and either two children or a run of
 /// blocks.
@@ -51,26 +58,56 @@ struct Node {
 
 const EMPTY_NODE: Node = Node { min: [f64::INFINITY; 3], max: [f64::NEG_INFINITY; 3], start: 0, count: 0 };
 
-/// Up to four children: their boxes lane by lane (axis, then child), and
-/// what each child is. An unused lane has the empty box (`min = +∞`,
-/// `max = -∞`), which no slab test enters. 224 bytes, aligned to lines.
+/// Up to `W = 4H` children: their boxes lane by lane (axis, then `H`
+/// groups of four children), and what each child is. An unused lane has
+/// the empty box (`min = +∞`, `max = -∞`), which no slab test enters.
+/// Four-wide: 224 bytes, eight-wide: 448, aligned to lines.
 #[derive(Clone, Copy, Debug)]
 #[repr(align(64))]
-struct Node4 {
-    min: [f64x4; 3],
-    max: [f64x4; 3],
-    /// Inner child: its index in `Bvh::nodes`. Leaf: its first position in
+struct Wide<const W: usize, const H: usize> {
+    min: [[f64x4; H]; 3],
+    max: [[f64x4; H]; 3],
+    /// Inner child: its index in `Tree::nodes`. Leaf: its first position in
     /// `Bvh::items`.
-    child: [u32; 4],
+    child: [u32; W],
     /// Blocks in a leaf child; 0 for an inner child (and an unused lane).
-    count: [u32; 4],
+    count: [u32; W],
 }
 
-/// The hierarchy: four-wide nodes (the root is node 0) and the block
-/// indices the leaves point into.
+/// A wide tree: its nodes, the root first.
+#[derive(Clone, Debug, Default)]
+struct Tree<const W: usize, const H: usize> {
+    nodes: Vec<Wide<W, H>>,
+}
+
+/// The tree of a scene, four- or eight-wide by its size.
+#[derive(Clone, Debug)]
+enum Nodes {
+    Four(Tree<4, 1>),
+    Eight(Tree<8, 2>),
+}
+
+impl Default for Nodes {
+    fn default() -> Self {
+        Nodes::Four(Tree::default())
+    }
+}
+
+/// Runs `$body` with `$t` bound to the tree, whichever its width (each
+/// width's walk compiled on its own).
+macro_rules! with_tree {
+    ($nodes:expr, $t:ident => $body:expr) => {
+        match $nodes {
+            Nodes::Four($t) => $body,
+            Nodes::Eight($t) => $body,
+        }
+    };
+}
+
+/// The hierarchy: wide nodes and the block indices the leaves point into.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Bvh {
-    nodes: Vec<Node4>,
+    nodes: Nodes,
     items: Vec<u32>,
 }
 
@@ -118,7 +155,7 @@ impl RayBoxes {
     /// NaN (`0·∞`) from its boundary plane, which fails both comparisons and
     /// leaves the range open (the closed box holds that point).
     ///
-    /// [`RayBoxes::enter4`] is the same arithmetic, lane by lane.
+    /// [`RayBoxes::enter_node`] is the same arithmetic, lane by lane.
     #[inline(always)]
     pub(crate) fn enter(&self, min: &[f64; 3], max: &[f64; 3], t_min: f64, t_max: f64) -> Option<f64> {
         let (t0, t1) = self.clip(min, max, t_min, t_max);
@@ -159,30 +196,42 @@ impl RayBoxes {
         (t0, t1)
     }
 
-    /// [`RayBoxes::enter`] for the four children of a node at once: the
-    /// entries, and a bit per child whose box the ray enters.
+    /// [`RayBoxes::enter`] for the children of a node at once, four at a
+    /// time: the entries (group `g`, lane `l` for child `4g + l`), and a bit
+    /// per child whose box the ray enters.
     #[inline(always)]
-    fn enter4(&self, node: &Node4, t_min: f64, t_max: f64) -> (f64x4, u32) {
-        let (mut t0, mut t1) = (f64x4::splat(t_min), f64x4::splat(t_max));
-        for i in 0..3 {
-            // Broadcast loads: cheaper than keeping four-lane copies per ray.
-            let inv = f64x4::splat(self.inv[i]);
-            let a = (node.min[i] + f64x4::splat(self.shift_lo[i])) * inv;
-            let b = (node.max[i] + f64x4::splat(self.shift_hi[i])) * inv;
-            let (a, b) = if self.inv[i] >= 0.0 { (a, b) } else { (b, a) };
-            // `if a > t0 { t0 = a }` lane by lane: NaN keeps `t0`.
-            t0 = a.cmp_gt(t0).blend(a, t0);
-            t1 = b.cmp_lt(t1).blend(b, t1);
+    fn enter_node<const W: usize, const H: usize>(
+        &self,
+        node: &Wide<W, H>,
+        t_min: f64,
+        t_max: f64,
+    ) -> ([f64x4; H], u32) {
+        let mut entries = [f64x4::ZERO; H];
+        let mut mask = 0;
+        for (g, entry) in entries.iter_mut().enumerate() {
+            let (mut t0, mut t1) = (f64x4::splat(t_min), f64x4::splat(t_max));
+            for i in 0..3 {
+                // Broadcast loads: cheaper than keeping four-lane copies per ray.
+                let inv = f64x4::splat(self.inv[i]);
+                let a = (node.min[i][g] + f64x4::splat(self.shift_lo[i])) * inv;
+                let b = (node.max[i][g] + f64x4::splat(self.shift_hi[i])) * inv;
+                let (a, b) = if self.inv[i] >= 0.0 { (a, b) } else { (b, a) };
+                // `if a > t0 { t0 = a }` lane by lane: NaN keeps `t0`.
+                t0 = a.cmp_gt(t0).blend(a, t0);
+                t1 = b.cmp_lt(t1).blend(b, t1);
+            }
+            let slack = f64x4::splat(4.0 * f64::EPSILON) * t1.abs().max(t0.abs());
+            let hit = t0.cmp_lt(f64x4::splat(f64::INFINITY)) & t0.cmp_le(t1 + slack);
+            *entry = t0 - slack;
+            mask |= (hit.move_mask() as u32) << (4 * g);
         }
-        let slack = f64x4::splat(4.0 * f64::EPSILON) * t1.abs().max(t0.abs());
-        let hit = t0.cmp_lt(f64x4::splat(f64::INFINITY)) & t0.cmp_le(t1 + slack);
-        (t0 - slack, hit.move_mask() as u32)
+        (entries, mask)
     }
 }
 
 /// Four rays prepared for slab tests, lane by lane: the [`RayBoxes`] of
 /// each, transposed, so that one box is tested against all four at once.
-/// Each lane computes exactly what [`RayBoxes::enter4`] computes for its
+/// Each lane computes exactly what [`RayBoxes::enter_node`] computes for its
 /// ray (the same operations on the same values), so a packet walk enters
 /// a box for a lane exactly when that ray's own walk would.
 #[derive(Clone, Copy, Debug)]
@@ -209,11 +258,17 @@ impl RayBoxes4 {
     /// Child `c` of `node` against the four rays: their entries and a bit
     /// per ray that enters it within its `[t_min, t_max]`.
     #[inline(always)]
-    fn enter_child(&self, node: &Node4, c: usize, t_min: f64x4, t_max: f64x4) -> (f64x4, u32) {
+    fn enter_child<const W: usize, const H: usize>(
+        &self,
+        node: &Wide<W, H>,
+        c: usize,
+        t_min: f64x4,
+        t_max: f64x4,
+    ) -> (f64x4, u32) {
         let (mut t0, mut t1) = (t_min, t_max);
         for i in 0..3 {
-            let lo = f64x4::splat(node.min[i].as_array_ref()[c]);
-            let hi = f64x4::splat(node.max[i].as_array_ref()[c]);
+            let lo = f64x4::splat(node.min[i][c / 4].as_array_ref()[c % 4]);
+            let hi = f64x4::splat(node.max[i][c / 4].as_array_ref()[c % 4]);
             let a = (lo + self.shift_lo[i]) * self.inv[i];
             let b = (hi + self.shift_hi[i]) * self.inv[i];
             let (a, b) = (self.forward[i].blend(a, b), self.forward[i].blend(b, a));
@@ -227,13 +282,15 @@ impl RayBoxes4 {
 }
 
 impl Bvh {
-    /// Builds the hierarchy over `(index, box)` pairs; every box must be bounded.
+    /// Builds the hierarchy over `(index, box)` pairs; every box must be
+    /// bounded. Eight-wide from [`EIGHT_WIDE_FROM`] pairs on, else four-wide.
     pub(crate) fn build(entries: &[(u32, Aabb)]) -> Self {
-        Self::build_with(entries, PARALLEL_FROM)
+        Self::build_with(entries, PARALLEL_FROM, entries.len() >= EIGHT_WIDE_FROM)
     }
 
-    /// [`Bvh::build`], with subtrees of `parallel_from` blocks or more built on two threads.
-    fn build_with(entries: &[(u32, Aabb)], parallel_from: usize) -> Self {
+    /// [`Bvh::build`], with subtrees of `parallel_from` blocks or more built
+    /// on two threads, eight-wide if `eight`.
+    fn build_with(entries: &[(u32, Aabb)], parallel_from: usize, eight: bool) -> Self {
         if entries.is_empty() {
             return Bvh::default();
         }
@@ -250,54 +307,12 @@ impl Bvh {
             Binary { nodes: Vec::with_capacity(2 * entries.len()), items: Vec::with_capacity(entries.len()) };
         binary.nodes.push(EMPTY_NODE);
         binary.build_node(0, &mut work, 0, parallel_from);
-        let mut bvh = Bvh { nodes: Vec::with_capacity(entries.len() / 2 + 1), items: binary.items };
-        let root = &binary.nodes[0];
-        if root.count > 0 {
-            // A single leaf: one node with one lane.
-            let mut node = Node4::EMPTY;
-            node.set_box(0, &root.min, &root.max);
-            node.child[0] = root.start;
-            node.count[0] = root.count;
-            bvh.nodes.push(node);
+        let nodes = if eight {
+            Nodes::Eight(Tree::from_binary(&binary.nodes))
         } else {
-            bvh.collapse(&binary.nodes, 0);
-        }
-        bvh
-    }
-
-    /// Appends the four-wide node for the binary inner node `n`, then those
-    /// of its inner descendants; returns its index. Its children are `n`'s
-    /// descendants found by opening the shallowest inner child until there
-    /// are four, or only leaves: so every inner child is at least two binary
-    /// levels below `n`, and the four-wide tree is at most `MAX_DEPTH / 2`
-    /// deep (see `STACK`).
-    fn collapse(&mut self, nodes: &[Node], n: usize) -> u32 {
-        let first = nodes[n].start as usize;
-        // `(node, binary depth below n)`.
-        let mut children = vec![(first, 1), (first + 1, 1)];
-        while children.len() < 4 {
-            let shallowest =
-                (0..children.len()).filter(|&j| nodes[children[j].0].count == 0).min_by_key(|&j| children[j].1);
-            let Some(j) = shallowest else { break };
-            let (c, d) = children.remove(j);
-            let c = nodes[c].start as usize;
-            children.extend([(c, d + 1), (c + 1, d + 1)]);
-        }
-        let me = self.nodes.len();
-        self.nodes.push(Node4::EMPTY);
-        let mut node = Node4::EMPTY;
-        for (lane, &(c, _)) in children.iter().enumerate() {
-            let k = &nodes[c];
-            node.set_box(lane, &k.min, &k.max);
-            if k.count > 0 {
-                node.child[lane] = k.start;
-                node.count[lane] = k.count;
-            } else {
-                node.child[lane] = self.collapse(nodes, c);
-            }
-        }
-        self.nodes[me] = node;
-        me as u32
+            Nodes::Four(Tree::from_binary(&binary.nodes))
+        };
+        Bvh { nodes, items: binary.items }
     }
 
     /// The block indices in leaf order (a leaf's blocks are consecutive).
@@ -314,7 +329,7 @@ impl Bvh {
     /// empty set after the clip to its box).
     #[inline]
     pub(crate) fn traverse(&self, ray: &RayBoxes, t_min: f64, t_max: &mut f64, visit: impl FnMut(u32, f64, &mut f64)) {
-        self.walk::<true>(ray, t_min, t_max, visit);
+        with_tree!(&self.nodes, t => t.walk::<true>(ray, t_min, t_max, visit))
     }
 
     /// [`Bvh::traverse`] in no particular order, for any-hit queries: the
@@ -328,9 +343,92 @@ impl Bvh {
         t_max: &mut f64,
         visit: impl FnMut(u32, f64, &mut f64),
     ) {
-        self.walk::<false>(ray, t_min, t_max, visit);
+        with_tree!(&self.nodes, t => t.walk::<false>(ray, t_min, t_max, visit))
     }
 
+    /// [`Bvh::traverse`] for four rays at once, the lanes in `active`:
+    /// each node is read once for all of them. `visit(k, lane, t_max)` is
+    /// called for every block whose box lane `lane`'s ray crosses within
+    /// `[t_min, t_max[lane]]` (and may lower `t_max[lane]`), so each lane
+    /// visits at least the blocks its own [`Bvh::traverse`] visits: every
+    /// block its walk enters with the final `t_max`, and the boxes that hold
+    /// it at `t_min`. Children are taken nearest first by the nearest entry
+    /// among the lanes that enter them.
+    #[inline]
+    pub(crate) fn traverse4(
+        &self,
+        rays: &RayBoxes4,
+        active: u32,
+        t_min: f64,
+        t_max: &mut [f64; 4],
+        visit: impl FnMut(u32, usize, &mut [f64; 4]),
+    ) {
+        with_tree!(&self.nodes, t => t.traverse4(rays, active, t_min, t_max, visit))
+    }
+
+    /// Visits the blocks whose boxes contain `p` (at the depth limit, every
+    /// block of a leaf whose box contains it; see [`Bvh::traverse`]).
+    pub(crate) fn visit_point(&self, p: &[f64; 3], visit: impl FnMut(u32)) {
+        with_tree!(&self.nodes, t => t.visit_point(&self.items, p, visit))
+    }
+}
+
+impl<const W: usize, const H: usize> Tree<W, H> {
+    /// The wide tree of a binary one (root: node 0, not empty).
+    fn from_binary(binary: &[Node]) -> Self {
+        const { assert!(W == 4 * H && W <= 8) };
+        let mut tree = Tree { nodes: Vec::with_capacity(binary.len() / (W - 1) + 1) };
+        let root = &binary[0];
+        if root.count > 0 {
+            // A single leaf: one node with one lane.
+            let mut node = Wide::EMPTY;
+            node.set_box(0, &root.min, &root.max);
+            node.child[0] = root.start;
+            node.count[0] = root.count;
+            tree.nodes.push(node);
+        } else {
+            tree.collapse(binary, 0);
+        }
+        tree
+    }
+
+    /// Appends the wide node for the binary inner node `n`, then those of
+    /// its inner descendants; returns its index. Its children are `n`'s
+    /// descendants found by opening the shallowest inner child until there
+    /// are `W`, or only leaves: so every inner child is at least two binary
+    /// levels below `n` (both children of `n` are opened before any deeper
+    /// node, if inner), and the wide tree is at most `MAX_DEPTH / 2` deep
+    /// (see `STACK`).
+    fn collapse(&mut self, nodes: &[Node], n: usize) -> u32 {
+        let first = nodes[n].start as usize;
+        // `(node, binary depth below n)`.
+        let mut children = vec![(first, 1), (first + 1, 1)];
+        while children.len() < W {
+            let shallowest =
+                (0..children.len()).filter(|&j| nodes[children[j].0].count == 0).min_by_key(|&j| children[j].1);
+            let Some(j) = shallowest else { break };
+            let (c, d) = children.remove(j);
+            let c = nodes[c].start as usize;
+            children.extend([(c, d + 1), (c + 1, d + 1)]);
+        }
+        let me = self.nodes.len();
+        self.nodes.push(Wide::EMPTY);
+        let mut node = Wide::EMPTY;
+        for (lane, &(c, _)) in children.iter().enumerate() {
+            let k = &nodes[c];
+            node.set_box(lane, &k.min, &k.max);
+            if k.count > 0 {
+                node.child[lane] = k.start;
+                node.count[lane] = k.count;
+            } else {
+                node.child[lane] = self.collapse(nodes, c);
+            }
+        }
+        self.nodes[me] = node;
+        me as u32
+    }
+
+    /// [`Bvh::traverse`] (`NEAREST_FIRST`) or [`Bvh::traverse_any`].
     #[inline(always)]
     fn walk<const NEAREST_FIRST: bool>(
         &self,
@@ -361,29 +459,29 @@ impl Bvh {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            let (entry, mut hits) = ray.enter4(node, t_min, *t_max);
-            let entry = entry.to_array();
+            let (entry, mut hits) = ray.enter_node(node, t_min, *t_max);
+            let entry = |lane: usize| entry[lane / 4].as_array_ref()[lane % 4];
             if !NEAREST_FIRST {
                 if hits != 0 {
                     let lane = hits.trailing_zeros() as usize;
                     hits &= hits - 1;
-                    next = Some((node.entry(lane), entry[lane]));
+                    next = Some((node.entry(lane), entry(lane)));
                 }
                 while hits != 0 {
                     let lane = hits.trailing_zeros() as usize;
                     hits &= hits - 1;
-                    stack.push((node.entry(lane), entry[lane]));
+                    stack.push((node.entry(lane), entry(lane)));
                 }
                 continue;
             }
             // The children entered, nearest first (insertion into at most
-            // four places), pushed farthest first so the nearest pops next.
-            let mut order = [(0.0f64, 0u64); 4];
+            // `W` places), pushed farthest first so the nearest pops next.
+            let mut order = [(0.0f64, 0u64); W];
             let mut n = 0;
             while hits != 0 {
                 let lane = hits.trailing_zeros() as usize;
                 hits &= hits - 1;
-                insert_nearest(&mut order, &mut n, (entry[lane], node.entry(lane)));
+                insert_nearest(&mut order, &mut n, (entry(lane), node.entry(lane)));
             }
             // Cannot overflow: see `STACK`.
             for &(t, r) in order[1..n.max(1)].iter().rev() {
@@ -395,15 +493,9 @@ impl Bvh {
         }
     }
 
-    /// [`Bvh::traverse`] for four rays at once, the lanes in `active`:
-    /// each node is read once for all of them. `visit(k, lane, t_max)` is
-    /// called for every block whose box lane `lane`'s ray crosses within
-    /// `[t_min, t_max[lane]]` (and may lower `t_max[lane]`), so each lane
-    /// visits at least the blocks its own [`Bvh::traverse`] visits: every
-    /// block its walk enters with the final `t_max`, and the boxes that hold
-    /// it at `t_min`. Children are taken nearest first by the nearest entry
-    /// among the lanes that enter them.
-    pub(crate) fn traverse4(
+    /// [`Bvh::traverse4`].
+    #[inline(always)]
+    fn traverse4(
         &self,
         rays: &RayBoxes4,
         active: u32,
@@ -446,11 +538,11 @@ impl Bvh {
             // moved their four-lane entries through unaligned stack slots:
             // each move a failed store-to-load forward, 17 % of the packet
             // walk's time on the 100,000-block grid, invisible to callgrind.)
-            let mut entries = [f64x4::ZERO; 4];
-            let mut masks = [0u32; 4];
-            let mut order = [(0.0f64, 0usize); 4];
+            let mut entries = [f64x4::ZERO; W];
+            let mut masks = [0u32; W];
+            let mut order = [(0.0f64, 0usize); W];
             let mut n = 0;
-            for c in 0..4 {
+            for c in 0..W {
                 let (entry, hits) = rays.enter_child(node, c, t_min4, t_max4);
                 let hits = hits & lanes;
                 if hits == 0 {
@@ -474,9 +566,8 @@ impl Bvh {
         }
     }
 
-    /// Visits the blocks whose boxes contain `p` (at the depth limit, every
-    /// block of a leaf whose box contains it; see [`Bvh::traverse`]).
-    pub(crate) fn visit_point(&self, p: &[f64; 3], mut visit: impl FnMut(u32)) {
+    /// [`Bvh::visit_point`], with the leaves pointing into `items`.
+    fn visit_point(&self, items: &[u32], p: &[f64; 3], mut visit: impl FnMut(u32)) {
         if self.nodes.is_empty() {
             return;
         }
@@ -484,9 +575,12 @@ impl Bvh {
         stack.push(0);
         while let Some(n) = stack.pop() {
             let node = &self.nodes[n as usize];
-            for lane in 0..4 {
+            for lane in 0..W {
                 let inside = (0..3).all(|i| {
-                    let (lo, hi) = (node.min[i].as_array_ref()[lane], node.max[i].as_array_ref()[lane]);
+                    let (lo, hi) = (
+                        node.min[i][lane / 4].as_array_ref()[lane % 4],
+                        node.max[i][lane / 4].as_array_ref()[lane % 4],
+                    );
                     lo <= p[i] && p[i] <= hi
                 });
                 if !inside {
@@ -494,7 +588,7 @@ impl Bvh {
                 }
                 let (child, count) = (node.child[lane], node.count[lane]);
                 if count > 0 {
-                    for &item in &self.items[child as usize..(child + count) as usize] {
+                    for &item in &items[child as usize..(child + count) as usize] {
                         visit(item);
                     }
                 } else {
@@ -506,9 +600,9 @@ impl Bvh {
 }
 
 /// Inserts `item` into the first `*n` entries of `order`, kept sorted by
-/// their first field (nearest entry first; at most four children).
+/// their first field (nearest entry first; at most `N` children).
 #[inline(always)]
-fn insert_nearest<T: Copy>(order: &mut [(f64, T); 4], n: &mut usize, item: (f64, T)) {
+fn insert_nearest<T: Copy, const N: usize>(order: &mut [(f64, T); N], n: &mut usize, item: (f64, T)) {
     let mut j = *n;
     while j > 0 && order[j - 1].0 > item.0 {
         order[j] = order[j - 1];
@@ -518,27 +612,28 @@ fn insert_nearest<T: Copy>(order: &mut [(f64, T); 4], n: &mut usize, item: (f64,
     *n += 1;
 }
 
-impl Node4 {
+impl<const W: usize, const H: usize> Wide<W, H> {
     /// Child `lane` as a stack entry: `child | count << 32`.
     #[inline(always)]
     fn entry(&self, lane: usize) -> u64 {
         u64::from(self.child[lane]) | u64::from(self.count[lane]) << 32
     }
 
-    const EMPTY: Node4 = Node4 {
-        min: [f64x4::new([f64::INFINITY; 4]); 3],
-        max: [f64x4::new([f64::NEG_INFINITY; 4]); 3],
-        child: [0; 4],
-        count: [0; 4],
+    const EMPTY: Self = Wide {
+        min: [[f64x4::new([f64::INFINITY; 4]); H]; 3],
+        max: [[f64x4::new([f64::NEG_INFINITY; 4]); H]; 3],
+        child: [0; W],
+        count: [0; W],
     };
 
     fn set_box(&mut self, lane: usize, min: &[f64; 3], max: &[f64; 3]) {
+        let g = lane / 4;
         for i in 0..3 {
-            let (mut lo, mut hi) = (self.min[i].to_array(), self.max[i].to_array());
-            lo[lane] = min[i];
-            hi[lane] = max[i];
-            self.min[i] = f64x4::new(lo);
-            self.max[i] = f64x4::new(hi);
+            let (mut lo, mut hi) = (self.min[i][g].to_array(), self.max[i][g].to_array());
+            lo[lane % 4] = min[i];
+            hi[lane % 4] = max[i];
+            self.min[i][g] = f64x4::new(lo);
+            self.max[i][g] = f64x4::new(hi);
         }
     }
 }
@@ -740,7 +835,15 @@ mod tests {
             let rb = RayBoxes::new(&ray);
             let got = rb.enter(&min, &max, 0.0, f64::INFINITY);
             assert_eq!(got.is_some(), expected, "{origin:?} along {dir:?}: {got:?}");
-            assert_eq!(lane0(&rb, &min, &max, 0.0, f64::INFINITY), got, "{origin:?} along {dir:?}: four-wide");
+            assert_eq!(
+                lane0::<4, 1>(&rb, &min, &max, 0, 0.0, f64::INFINITY),
+                got,
+                "{origin:?} along {dir:?}: four-wide"
+            );
+            for lane in [0, 5] {
+                let wide = lane0::<8, 2>(&rb, &min, &max, lane, 0.0, f64::INFINITY);
+                assert_eq!(wide, got, "{origin:?} along {dir:?}: eight-wide, lane {lane}");
+            }
             assert!(got.map_or(true, |t| !t.is_nan()), "{origin:?} along {dir:?}: NaN entry");
         };
         for axis in 0..3 {
@@ -764,14 +867,21 @@ mod tests {
         }
     }
 
-    /// [`RayBoxes::enter4`] for a node whose lane 0 holds the box (the other
-    /// lanes empty, which must never be entered).
-    fn lane0(rb: &RayBoxes, min: &[f64; 3], max: &[f64; 3], t_min: f64, t_max: f64) -> Option<f64> {
-        let mut node = Node4::EMPTY;
-        node.set_box(0, min, max);
-        let (entry, hits) = rb.enter4(&node, t_min, t_max);
-        assert_eq!(hits & !1, 0, "an empty lane was entered");
-        (hits & 1 == 1).then(|| entry.to_array()[0])
+    /// [`RayBoxes::enter_node`] for a node whose lane `lane` holds the box
+    /// (the other lanes empty, which must never be entered).
+    fn lane0<const W: usize, const H: usize>(
+        rb: &RayBoxes,
+        min: &[f64; 3],
+        max: &[f64; 3],
+        lane: usize,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<f64> {
+        let mut node = Wide::<W, H>::EMPTY;
+        node.set_box(lane, min, max);
+        let (entry, hits) = rb.enter_node(&node, t_min, t_max);
+        assert_eq!(hits & !(1 << lane), 0, "an empty lane was entered");
+        (hits & (1 << lane) != 0).then(|| entry[lane / 4].to_array()[lane % 4])
     }
 
     fn coord() -> impl Strategy<Value = f64> {
@@ -790,29 +900,36 @@ mod tests {
     }
 
     proptest! {
-        /// The four-wide slab test is the scalar one lane by lane, to the bit
+        /// The wide slab tests are the scalar one lane by lane, to the bit
         /// (parallel axes, flat boxes and boxes through the origin included).
         #[test]
-        fn four_lanes_are_the_scalar_test(ray in ray(), b in boxed(), t_min in 0.0..2.0f64, extra in 0.0..5.0f64) {
+        fn wide_lanes_are_the_scalar_test(
+            ray in ray(), b in boxed(), t_min in 0.0..2.0f64, extra in 0.0..5.0f64, lane in 0..8usize,
+        ) {
             let rb = RayBoxes::new(&ray);
             for t_max in [t_min + extra, f64::INFINITY] {
-                let scalar = rb.enter(&b.0, &b.1, t_min, t_max);
-                let lanes = lane0(&rb, &b.0, &b.1, t_min, t_max);
-                prop_assert_eq!(scalar.map(f64::to_bits), lanes.map(f64::to_bits));
+                let scalar = rb.enter(&b.0, &b.1, t_min, t_max).map(f64::to_bits);
+                let four = lane0::<4, 1>(&rb, &b.0, &b.1, lane % 4, t_min, t_max);
+                let eight = lane0::<8, 2>(&rb, &b.0, &b.1, lane, t_min, t_max);
+                prop_assert_eq!(scalar, four.map(f64::to_bits));
+                prop_assert_eq!(scalar, eight.map(f64::to_bits));
             }
         }
 
-        /// The collapsed tree visits exactly the blocks whose own boxes the
-        /// ray enters (no early exit), and `visit_point` exactly those whose
-        /// boxes hold the point.
+        /// The collapsed tree, four- and eight-wide, visits exactly the
+        /// blocks whose own boxes the ray enters (no early exit), and
+        /// `visit_point` exactly those whose boxes hold the point.
         #[test]
-        fn tree_visits_what_brute_force_does(boxes in prop::collection::vec(boxed(), 1..60), ray in ray(), p in [coord(), coord(), coord()]) {
+        fn tree_visits_what_brute_force_does(
+            boxes in prop::collection::vec(boxed(), 1..60), ray in ray(), p in [coord(), coord(), coord()], eight: bool,
+        ) {
             let entries: Vec<(u32, Aabb)> = boxes
                 .iter()
                 .enumerate()
                 .map(|(i, (lo, hi))| (i as u32, Aabb { min: Point3::from(*lo), max: Point3::from(*hi) }))
                 .collect();
-            let bvh = Bvh::build(&entries);
+            let bvh = Bvh::build_with(&entries, PARALLEL_FROM, eight);
+            prop_assert_eq!(matches!(bvh.nodes, Nodes::Eight(_)), eight);
             let rb = RayBoxes::new(&ray);
             let mut seen = Vec::new();
             let mut t_max = f64::INFINITY;
@@ -856,14 +973,29 @@ mod tests {
                 )
             })
             .collect();
-        let (one, two) = (Bvh::build_with(&entries, usize::MAX), Bvh::build_with(&entries, 64));
-        assert_eq!(one.items, two.items);
-        assert_eq!(one.nodes.len(), two.nodes.len());
-        for (a, b) in one.nodes.iter().zip(&two.nodes) {
+        for eight in [false, true] {
+            let (one, two) = (Bvh::build_with(&entries, usize::MAX, eight), Bvh::build_with(&entries, 64, eight));
+            assert_eq!(one.items, two.items);
+            match (&one.nodes, &two.nodes) {
+                (Nodes::Four(a), Nodes::Four(b)) => same_tree(a, b),
+                (Nodes::Eight(a), Nodes::Eight(b)) => same_tree(a, b),
+                _ => panic!("the widths differ"),
+            }
+        }
+        // The size decides the width.
+        assert!(matches!(Bvh::build(&entries).nodes, Nodes::Eight(_)));
+        assert!(matches!(Bvh::build(&entries[..EIGHT_WIDE_FROM - 1]).nodes, Nodes::Four(_)));
+    }
+
+    fn same_tree<const W: usize, const H: usize>(a: &Tree<W, H>, b: &Tree<W, H>) {
+        assert_eq!(a.nodes.len(), b.nodes.len());
+        for (a, b) in a.nodes.iter().zip(&b.nodes) {
             assert_eq!((a.child, a.count), (b.child, b.count));
             for i in 0..3 {
-                assert_eq!(a.min[i].to_array(), b.min[i].to_array());
-                assert_eq!(a.max[i].to_array(), b.max[i].to_array());
+                for g in 0..H {
+                    assert_eq!(a.min[i][g].to_array(), b.min[i][g].to_array());
+                    assert_eq!(a.max[i][g].to_array(), b.max[i][g].to_array());
+                }
             }
         }
     }

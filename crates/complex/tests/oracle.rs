@@ -366,6 +366,46 @@ fn brute_first(c: &Complex, ray: &Ray) -> Option<(f64, Option<BlockId>, Option<B
     brute_events(c, ray).into_iter().find(|(t, b, a)| *t > c.epsilon() && visible(c, *b, *a))
 }
 
+/// Every query agrees with brute force over every block on a large scene
+/// (see the tests below).
+fn large_scene_agrees(specs: Vec<Spec>, rays: &[Ray], all_opaque: bool) -> Result<(), TestCaseError> {
+    let specs: Vec<Spec> = specs.into_iter().map(|(s, t, m)| (s, t && !all_opaque, m)).collect();
+    let c = build(&specs);
+    let mut occluder = complex::Occluder::default();
+    for ray in rays {
+        let brute = brute_first(&c, ray);
+        let hit = c.cast_ray(ray, f64::INFINITY);
+        prop_assert_eq!(hit.map(|h| h.t), brute.map(|b| b.0));
+        if let (Some(h), Some((_, before, after))) = (hit, brute) {
+            prop_assert_eq!(Some(h.block), if h.entering { after } else { before });
+        }
+        for m in [f64::INFINITY, 1.0, 4.0, brute.map_or(1.0, |b| b.0)] {
+            let want = brute.is_some_and(|b| b.0 <= m);
+            prop_assert_eq!(c.occluded(ray, m), want, "max_t = {}", m);
+            // With the hint of the previous ray (another ray's blocker,
+            // or none), then with this ray's own blocker as the hint.
+            prop_assert_eq!(c.occluded_with(ray, m, &mut occluder), want, "max_t = {}, carried hint", m);
+            prop_assert_eq!(c.occluded_with(ray, m, &mut occluder), want, "max_t = {}, own hint", m);
+        }
+        let events: Vec<_> = c.partition(ray).events.iter().map(|e| (e.t, e.before, e.after)).collect();
+        prop_assert_eq!(events, brute_events(&c, ray));
+        // The point probe, at points of the ray away from every surface.
+        let transparent: Vec<bool> = c.blocks().iter().map(Block::is_transparent).collect();
+        for k in 0..8 {
+            let t = 0.01 + (k as f64 + 0.37) * 0.75;
+            if !away_from_surfaces(&c, ray, t) {
+                continue;
+            }
+            let x = ray.at(t);
+            let inside: Vec<bool> = c.blocks().iter().map(|b| b.solids().iter().all(|s| s.value(&x) <= 0.0)).collect();
+            prop_assert_eq!(c.contains_point(&x), oracle_owner(&inside, &transparent), "contains_point at t = {}", t);
+        }
+    }
+    packets_agree(&c, rays, f64::INFINITY)?;
+    packets_agree(&c, &rays[..8], 2.0)?;
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases((ProptestConfig::default().cases / 16).max(8)))]
 
@@ -377,30 +417,22 @@ proptest! {
         rays in proptest::collection::vec(ray_spec(), 40),
         all_opaque in any::<bool>(),
     ) {
-        let specs: Vec<Spec> =
-            specs.into_iter().map(|(s, t, m)| (s, t && !all_opaque, m)).collect();
-        let c = build(&specs);
-        let mut occluder = complex::Occluder::default();
-        for ray in &rays {
-            let brute = brute_first(&c, ray);
-            let hit = c.cast_ray(ray, f64::INFINITY);
-            prop_assert_eq!(hit.map(|h| h.t), brute.map(|b| b.0));
-            if let (Some(h), Some((_, before, after))) = (hit, brute) {
-                prop_assert_eq!(Some(h.block), if h.entering { after } else { before });
-            }
-            for m in [f64::INFINITY, 1.0, 4.0, brute.map_or(1.0, |b| b.0)] {
-                let want = brute.is_some_and(|b| b.0 <= m);
-                prop_assert_eq!(c.occluded(ray, m), want, "max_t = {}", m);
-                // With the hint of the previous ray (another ray's blocker,
-                // or none), then with this ray's own blocker as the hint.
-                prop_assert_eq!(c.occluded_with(ray, m, &mut occluder), want, "max_t = {}, carried hint", m);
-                prop_assert_eq!(c.occluded_with(ray, m, &mut occluder), want, "max_t = {}, own hint", m);
-            }
-            let events: Vec<_> = c.partition(ray).events.iter().map(|e| (e.t, e.before, e.after)).collect();
-            prop_assert_eq!(events, brute_events(&c, ray));
-        }
-        packets_agree(&c, &rays, f64::INFINITY)?;
-        packets_agree(&c, &rays[..8], 2.0)?;
+        large_scene_agrees(specs, &rays, all_opaque)?;
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases((ProptestConfig::default().cases / 64).max(4)))]
+
+    /// The same with more blocks than the eight-wide tree starts from
+    /// (512): its walks, the packet walk and the point probe.
+    #[test]
+    fn eight_wide_bvh_agrees_with_brute_force(
+        specs in proptest::collection::vec(small_block(), 520..640),
+        rays in proptest::collection::vec(ray_spec(), 24),
+        all_opaque in any::<bool>(),
+    ) {
+        large_scene_agrees(specs, &rays, all_opaque)?;
     }
 }
 
