@@ -39,7 +39,7 @@ const STACK: usize = 7 * MAX_DEPTH.div_ceil(2) + 1;
 /// From this many bounded blocks on, the tree is eight-wide (see the module
 /// documentation and `docs/benchmarks.md`: below it the wider node costs
 /// small scenes more than the levels it saves).
-pub(crate) const EIGHT_WIDE_FROM: usize = 512;
+pub(crate) const EIGHT_WIDE_FROM: usize = 256;
 
 /// A node of the binary build: its box and either two children or a run of
 /// blocks.
