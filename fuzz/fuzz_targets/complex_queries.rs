@@ -6,8 +6,8 @@
 //! `[0, ∞)` in order without gaps, its owners follow the priority rule and its
 //! events sit between its segments; `cast_ray` returns the first visible
 //! event of the partition in `(ε, max_t]`, with a finite point and normal;
-//! `segments_into` gives the partition's segments and `first_interface` its
-//! first interface.
+//! `segments_into` gives the partition's segments, `segments_within` those
+//! that start before `max_t`, and `first_interface` its first interface.
 #![no_main]
 
 use complex::{Block, BlockId, Complex, ComplexError, ComplexOptions, MaterialKey, Occluder, Opacity, Partition};
@@ -200,6 +200,21 @@ fuzz_target!(|input: ComplexInput| {
         c.segments_into(&ray, &mut scratch);
         assert_eq!(scratch.segments, partition.segments, "segments_into against the partition");
         assert!(scratch.events.is_empty(), "segments_into left events: {scratch:?}");
+        // Up to `max_t`: the segments that start before it, the last one
+        // ending at or after it.
+        let max_t = cast.max_t.value();
+        c.segments_within(&ray, max_t, &mut scratch);
+        let starting: Vec<_> = partition.segments.iter().filter(|s| max_t.is_nan() || s.start < max_t).collect();
+        assert_eq!(scratch.segments.len(), starting.len(), "segments_within({max_t}) against {partition:?}");
+        for (k, (w, s)) in scratch.segments.iter().zip(&starting).enumerate() {
+            assert_eq!((w.start, w.owner), (s.start, s.owner), "segments_within({max_t}) against {partition:?}");
+            let last = k + 1 == starting.len();
+            assert!(
+                w.end == s.end || last && w.end >= max_t && s.end >= max_t,
+                "segments_within({max_t}): {w:?}, {s:?}"
+            );
+        }
+        assert!(scratch.events.is_empty(), "segments_within left events: {scratch:?}");
         let first = c.first_interface(&ray, &mut scratch);
         if accurate && ray.origin().coords.amax() <= FAR {
             let want = partition.events.iter().find(|e| e.t > c.epsilon() && !e.same_medium);

@@ -832,6 +832,40 @@ impl Complex {
         self.partition_with(ray, f64::NEG_INFINITY, out);
     }
 
+    /// The segments of [`Complex::partition`] that start before `max_t`,
+    /// into `out.segments` (`out.events` is left empty): the same starts and
+    /// owners, and the same ends except the last one's, which lies at or
+    /// after `max_t` but may differ from the partition's. Only the blocks
+    /// whose boxes the ray crosses before `max_t` are visited, so a shadow
+    /// ray towards a light costs nothing beyond the light. Every segment that
+    /// starts before `max_t` is determined by those blocks: each of its
+    /// owners' intervals, and each interval end below `max_t`, reaches into
+    /// `[0, max_t)`. (In [`quadric::Precision::Certified`], which settles
+    /// near ties between the ends of any two blocks, every block is visited.)
+    /// A NaN `max_t` reads as `∞` ([`Complex::segments_into`]); for
+    /// `max_t <= 0` the list is empty.
+    pub fn segments_within(&self, ray: &Ray, max_t: f64, out: &mut Partition) {
+        if max_t.is_nan() || max_t == f64::INFINITY {
+            return self.segments_into(ray, out);
+        }
+        // Certified settles near ties between the ends of different blocks,
+        // a block beyond `max_t` included: it takes them all.
+        let reach = if self.kernel.precision == quadric::Precision::Certified { f64::INFINITY } else { max_t };
+        let mut within = |sets: &mut Sets, cuts: &mut Vec<f64>| {
+            self.collect_sets(ray, reach, sets);
+            self.partition_of_sets(ray, sets, cuts, f64::NEG_INFINITY, out);
+            let keep = out.segments.iter().take_while(|s| s.start < max_t).count();
+            out.segments.truncate(keep);
+        };
+        SCRATCH.with(|s| match s.try_borrow_mut() {
+            Ok(mut s) => {
+                let Scratch { sets, cuts, .. } = &mut *s;
+                within(sets, cuts);
+            }
+            Err(_) => within(&mut Sets::default(), &mut Vec::new()),
+        });
+    }
+
     /// The partition with its events up to `until` (see `partition_of_sets`).
     fn partition_with(&self, ray: &Ray, until: f64, out: &mut Partition) {
         SCRATCH.with(|s| match s.try_borrow_mut() {

@@ -228,6 +228,26 @@ proptest! {
             prop_assert_eq!(&segments.segments, &p.segments);
             prop_assert!(segments.events.is_empty());
 
+            // segments_within(max_t) is the partition's segments that start
+            // before max_t, the last one ending at or after max_t.
+            let mut reach: Vec<f64> = vec![-1.0, 0.0, eps, 0.5, 2.0, f64::NAN, f64::INFINITY];
+            reach.extend(p.segments.iter().flat_map(|s| [s.start, s.end, 0.5 * (s.start + s.end)]));
+            for m in reach {
+                let mut within = p.clone();
+                c.segments_within(ray, m, &mut within);
+                prop_assert!(within.events.is_empty());
+                let starting: Vec<_> = p.segments.iter().filter(|s| m.is_nan() || s.start < m).collect();
+                prop_assert_eq!(within.segments.len(), starting.len(), "max_t = {}", m);
+                for (k, (w, s)) in within.segments.iter().zip(&starting).enumerate() {
+                    prop_assert_eq!((w.start, w.owner), (s.start, s.owner), "max_t = {}", m);
+                    if k + 1 < starting.len() {
+                        prop_assert_eq!(w.end, s.end, "max_t = {}", m);
+                    } else {
+                        prop_assert!(w.end >= m && s.end >= m || w.end == s.end, "max_t = {}: last ends {} and {}", m, w.end, s.end);
+                    }
+                }
+            }
+
             // occluded is "the first visible event is within max_t".
             let mut limits = vec![f64::INFINITY, 0.5, 3.0, eps];
             if let Some(t) = first {

@@ -316,8 +316,13 @@ impl<'w> Shader<'w> {
             let occluder = &mut scratch.occluders[light][secondary];
             return if self.complex.occluded_with(&ray, dist, occluder) { Vector3::zeros() } else { one };
         }
-        // The media crossed are in the segments; no event (hit point, normal) is needed.
-        self.complex.segments_into(&ray, &mut scratch.partition);
+        // The media crossed are in the segments; no event (hit point, normal)
+        // is needed, nor any block beyond the light. The segments that start
+        // before `reach` are the partition's (the last one's end aside, which
+        // stays past `reach > ε` as the partition's does), so the loop below
+        // weighs exactly what it weighs over the whole partition.
+        let reach = dist.max(2.0 * self.eps);
+        self.complex.segments_within(&ray, reach, &mut scratch.partition);
         let mut pass = one;
         let mut previous: Option<complex::MaterialKey> = None;
         for s in &scratch.partition.segments {
