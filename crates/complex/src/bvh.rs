@@ -638,8 +638,8 @@ impl<const W: usize, const H: usize> Wide<W, H> {
     }
 }
 
-/// The binary tree the builder makes (and [`Bvh::collapse`] turns into the
-/// four-wide one): the two children of an inner node are consecutive.
+/// The binary tree the builder makes (and [`Tree::collapse`] turns into the
+/// wide one): the two children of an inner node are consecutive.
 struct Binary {
     nodes: Vec<Node>,
     items: Vec<u32>,
@@ -729,7 +729,7 @@ fn half_area(min: &[f64; 3], max: &[f64; 3]) -> f64 {
 /// small boxes to one side and large to the other, so that a ray missing
 /// the small ones skips them. A split is made even where the SAH would
 /// price a leaf of two blocks lower: one block per leaf keeps the walks
-/// exact, and the four-wide collapse absorbs the extra level.
+/// exact, and the wide collapse absorbs the extra level.
 fn split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<usize> {
     if work.len() <= LEAF_SIZE {
         return None;
