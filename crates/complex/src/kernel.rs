@@ -217,7 +217,34 @@ mod tests {
         })
     }
 
+    /// An axis-aligned ellipsoid from its coefficients, with linear terms:
+    /// `Σ aᵢxᵢ² + 2gᵢxᵢ + k` (centre `-g/a`, stored around the origin).
+    fn ellipsoid_from_coefficients() -> impl Strategy<Value = Quadric> {
+        let a = || 1e-3..1e3f64;
+        let g = || prop_oneof![Just(0.0), -1e3..1e3f64];
+        ([a(), a(), a()], [g(), g(), g()], 0.01..10.0f64).prop_map(|(a, g, level)| {
+            // k below Σ gᵢ²/aᵢ, so that the ellipsoid is not empty.
+            let k = (0..3).map(|i| g[i] * g[i] / a[i]).sum::<f64>() - level;
+            Quadric::from_coefficients([a[0], a[1], a[2], 0.0, 0.0, 0.0, g[0], g[1], g[2], k]).expect("finite")
+        })
+    }
+
     proptest! {
+        /// Every point of an axis-aligned ellipsoid lies in its ball, with
+        /// linear terms too.
+        #[test]
+        fn the_ball_of_coefficients_holds_its_ellipsoid(q in ellipsoid_from_coefficients(), dirs in proptest::collection::vec(strategies::ray(1.0), 16)) {
+            let ball = Ball::of(&q).expect("an ellipsoid");
+            let c = Point3::from(ball.centre);
+            prop_assert!(q.value(&c) <= 0.0, "the centre {:?} is outside", c);
+            for ray in &dirs {
+                let probe = Ray::new(c, ray.direction()).expect("valid");
+                for iv in q.intervals(&probe, 0).iter() {
+                    prop_assert!(iv.exit.t.is_finite() && iv.exit.t <= ball.radius, "{} beyond {}", iv.exit.t, ball.radius);
+                }
+            }
+        }
+
         /// Every point of an axis-aligned ellipsoid lies in its ball.
         #[test]
         fn the_ball_holds_its_ellipsoid((q, _) in ellipsoid(), dirs in proptest::collection::vec(strategies::ray(1.0), 16)) {
