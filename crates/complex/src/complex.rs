@@ -821,7 +821,7 @@ impl Complex {
     /// per-thread scratch buffers): only blocks whose boxes the ray crosses
     /// are visited.
     pub fn partition_into(&self, ray: &Ray, out: &mut Partition) {
-        self.partition_with(ray, f64::INFINITY, out);
+        self.partition_with(ray, f64::INFINITY, f64::INFINITY, out);
     }
 
     /// The segments of [`Complex::partition`] alone, into `out.segments`
@@ -829,7 +829,7 @@ impl Complex {
     /// What a shadow ray needs to weigh the media between a point and a
     /// light. Allocates only as [`Complex::partition_into`] does.
     pub fn segments_into(&self, ray: &Ray, out: &mut Partition) {
-        self.partition_with(ray, f64::NEG_INFINITY, out);
+        self.partition_with(ray, f64::INFINITY, f64::NEG_INFINITY, out);
     }
 
     /// The segments of [`Complex::partition`] that start before `max_t`,
@@ -851,29 +851,21 @@ impl Complex {
         // Certified settles near ties between the ends of different blocks,
         // a block beyond `max_t` included: it takes them all.
         let reach = if self.kernel.precision == quadric::Precision::Certified { f64::INFINITY } else { max_t };
-        let mut within = |sets: &mut Sets, cuts: &mut Vec<f64>| {
-            self.collect_sets(ray, reach, sets);
-            self.partition_of_sets(ray, sets, cuts, f64::NEG_INFINITY, out);
-            let keep = out.segments.iter().take_while(|s| s.start < max_t).count();
-            out.segments.truncate(keep);
-        };
-        SCRATCH.with(|s| match s.try_borrow_mut() {
-            Ok(mut s) => {
-                let Scratch { sets, cuts, .. } = &mut *s;
-                within(sets, cuts);
-            }
-            Err(_) => within(&mut Sets::default(), &mut Vec::new()),
-        });
+        self.partition_with(ray, reach, f64::NEG_INFINITY, out);
+        let keep = out.segments.iter().take_while(|s| s.start < max_t).count();
+        out.segments.truncate(keep);
     }
 
-    /// The partition with its events up to `until` (see `partition_of_sets`).
-    fn partition_with(&self, ray: &Ray, until: f64, out: &mut Partition) {
+    /// The partition formed from the blocks whose boxes the ray crosses
+    /// before `reach`, with its events up to `until` (see
+    /// `partition_of_sets`).
+    fn partition_with(&self, ray: &Ray, reach: f64, until: f64, out: &mut Partition) {
         SCRATCH.with(|s| match s.try_borrow_mut() {
             Ok(mut s) => {
                 let Scratch { sets, cuts, .. } = &mut *s;
-                self.partition_core(ray, sets, cuts, until, out);
+                self.partition_core(ray, reach, sets, cuts, until, out);
             }
-            Err(_) => self.partition_core(ray, &mut Sets::default(), &mut Vec::new(), until, out),
+            Err(_) => self.partition_core(ray, reach, &mut Sets::default(), &mut Vec::new(), until, out),
         });
     }
 
@@ -922,11 +914,11 @@ impl Complex {
                     }
                     after = until;
                 }
-                self.partition_core(ray, sets, cuts, f64::INFINITY, out);
+                self.partition_core(ray, f64::INFINITY, sets, cuts, f64::INFINITY, out);
                 found(out)
             }
             Err(_) => {
-                self.partition_core(ray, &mut Sets::default(), &mut Vec::new(), f64::INFINITY, out);
+                self.partition_core(ray, f64::INFINITY, &mut Sets::default(), &mut Vec::new(), f64::INFINITY, out);
                 found(out)
             }
         })
@@ -1007,10 +999,18 @@ impl Complex {
         t_max
     }
 
-    /// The partition with its events up to `until`, with caller-provided
-    /// buffers for the sets and cuts.
-    fn partition_core(&self, ray: &Ray, sets: &mut Sets, cuts: &mut Vec<f64>, until: f64, out: &mut Partition) {
-        self.collect_sets(ray, f64::INFINITY, sets);
+    /// [`Complex::partition_with`], with caller-provided buffers for the
+    /// sets and cuts.
+    fn partition_core(
+        &self,
+        ray: &Ray,
+        reach: f64,
+        sets: &mut Sets,
+        cuts: &mut Vec<f64>,
+        until: f64,
+        out: &mut Partition,
+    ) {
+        self.collect_sets(ray, reach, sets);
         self.partition_of_sets(ray, sets, cuts, until, out);
     }
 

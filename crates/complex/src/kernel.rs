@@ -170,7 +170,7 @@ impl Kernel {
     pub(crate) fn spans_into(&self, k: u32, ray: &Ray, blocks: &[Block], out: &mut Spans) {
         let slot = &self.slots[k as usize];
         if slot.count > 0 {
-            if self.precision == Precision::Accurate && slot.ball.missed_by(ray) {
+            if slot.ball.radius < f64::INFINITY && self.precision == Precision::Accurate && slot.ball.missed_by(ray) {
                 *out = Spans::Empty;
                 return;
             }
