@@ -668,7 +668,10 @@ impl Binary {
             let (left, right) = work.split_at_mut(mid);
             if parallel {
                 let subtree = |work: &mut [Entry]| {
-                    let mut t = Binary { nodes: vec![EMPTY_NODE], items: Vec::with_capacity(work.len()) };
+                    // A binary tree over `n` blocks has at most `2n - 1` nodes.
+                    let mut nodes = Vec::with_capacity(2 * work.len());
+                    nodes.push(EMPTY_NODE);
+                    let mut t = Binary { nodes, items: Vec::with_capacity(work.len()) };
                     t.build_node(0, work, depth + 1, parallel_from);
                     t
                 };
