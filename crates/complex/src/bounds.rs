@@ -119,31 +119,53 @@ fn widen_up(x: f64, local: f64, abs: f64) -> f64 {
     x + WIDEN * local + WIDEN_ABS * (x.abs() + abs) + f64::MIN_POSITIVE
 }
 
-/// The box of each block, in order ([`block_box`]). Each box depends on its
-/// block alone, so large scenes compute them in parallel (on rayon's global
-/// pool) and get the same boxes whatever the number of threads.
-pub(crate) fn block_boxes(blocks: &[crate::Block]) -> Vec<Aabb> {
+/// A ball `(centre, radius)` that holds a block with room to spare (see
+/// [`block_bounds`]).
+pub(crate) type Ball = ([f64; 3], f64);
+
+/// The box and ball of each block, in order ([`block_bounds`]). Each
+/// depends on its block alone, so large scenes compute them in parallel
+/// (on rayon's global pool) and get the same ones whatever the number of
+/// threads.
+pub(crate) fn block_boxes(blocks: &[crate::Block]) -> (Vec<Aabb>, Vec<Option<Ball>>) {
     use rayon::prelude::*;
     /// Below this many blocks the boxes take under a millisecond: not worth waking the pool.
     const PARALLEL_FROM: usize = 1024;
     if blocks.len() < PARALLEL_FROM {
-        return blocks.iter().map(|b| block_box(b.solids())).collect();
+        return blocks.iter().map(|b| block_bounds(b.solids())).unzip();
     }
-    blocks.par_iter().with_min_len(256).map(|b| block_box(b.solids())).collect()
+    blocks.par_iter().with_min_len(256).map(|b| block_bounds(b.solids())).unzip()
 }
 
 /// The tight, conservative box of the intersection of `solids`; infinite on
 /// the axes where the block is unbounded, [`Aabb::EMPTY`] if it is provably empty.
-pub(crate) fn block_box(solids: &[Solid]) -> Aabb {
+///
+/// With it, the smallest of the balls found on the way: around a
+/// bounded polyhedron of the block's half-spaces (a box of six), or around
+/// a quadric with bounded cross-sections cut to a finite length by the
+/// half-spaces (a capped cylinder). Each holds a superset of the block, so
+/// the block; `None` if neither is found or the ball's volume is not below
+/// the box's (an ellipsoid's ball is the kernel's own, see `kernel.rs`).
+/// Computed here because the box needs the same vertices and axes.
+pub(crate) fn block_bounds(solids: &[Solid]) -> (Aabb, Option<Ball>) {
+    let smaller = |a: Option<Ball>, b: Option<Ball>| match (a, b) {
+        (Some(x), Some(y)) => Some(if y.1 < x.1 { y } else { x }),
+        (x, y) => x.or(y),
+    };
     let mut bx = Aabb::INFINITE;
+    let mut ball = None;
     for s in solids {
         if let Solid::Quadric(q) = s {
-            bx = bx.intersection(&analytic_box(q, solids));
+            let (b, around) = analytic_box(q, solids);
+            bx = bx.intersection(&b);
+            ball = smaller(ball, around);
         }
     }
-    bx = bx.intersection(&polytope_box(solids));
+    let (b, around) = polytope_box(solids);
+    bx = bx.intersection(&b);
+    ball = smaller(ball, around);
     if bx.is_empty() {
-        return Aabb::EMPTY;
+        return (Aabb::EMPTY, None);
     }
     for _round in 0..16 {
         let before = bx;
@@ -153,7 +175,7 @@ pub(crate) fn block_box(solids: &[Solid]) -> Aabb {
                 Solid::Quadric(q) => narrow_quadric(&mut bx, q),
             }
             if bx.is_empty() {
-                return Aabb::EMPTY;
+                return (Aabb::EMPTY, None);
             }
         }
         // Stop once a round gains less than a millionth of the extent.
@@ -170,7 +192,12 @@ pub(crate) fn block_box(solids: &[Solid]) -> Aabb {
             break;
         }
     }
-    bx
+    // A ball no smaller than the box (an axis-aligned box or a long
+    // upright cylinder) would cost its test on every visit and reject
+    // almost nothing the box has not: only smaller ones are kept.
+    let volume = (0..3).map(|i| bx.max[i] - bx.min[i]).product::<f64>();
+    let ball = ball.filter(|b| 4.0 / 3.0 * std::f64::consts::PI * b.1.powi(3) < 1.5 * volume);
+    (bx, ball)
 }
 
 /// The box of the polyhedron cut out by the block's half-spaces, if it is
@@ -182,7 +209,30 @@ pub(crate) fn block_box(solids: &[Solid]) -> Aabb {
 /// dependent normals (`|det| < 1e-10`) are skipped: their intersection is
 /// rounding noise far away; a vertex that only such a triple forms (a spike
 /// sharper than 10⁻¹⁰ rad) is the one case this does not cover.
-fn polytope_box(solids: &[Solid]) -> Aabb {
+fn polytope_box(solids: &[Solid]) -> (Aabb, Option<Ball>) {
+    let Some((vertices, slack)) = polytope_vertices(solids) else { return (Aabb::INFINITE, None) };
+    let mut bx = Aabb::EMPTY;
+    for v in &vertices {
+        bx = bx.union(&Aabb { min: Point3::from(*v), max: Point3::from(*v) });
+    }
+    // The ball: around the middle of the vertices' box, out to the farthest
+    // vertex. Every point of the polyhedron lies in the hull of its
+    // vertices, each within `slack` of its computed place on every axis, so
+    // within `√3·slack` of the hull of the computed ones.
+    let centre = (bx.min.coords + bx.max.coords) / 2.0;
+    let reach = vertices.iter().fold(0.0f64, |m, v| m.max((v - centre).norm()));
+    let radius = (reach + 2.0 * slack) * (1.0 + 1e-6);
+    let ball = (radius.is_finite() && centre.iter().all(|c| c.is_finite()))
+        .then_some(([centre.x, centre.y, centre.z], radius));
+    bx.min -= Vector3::repeat(slack);
+    bx.max += Vector3::repeat(slack);
+    (bx, ball)
+}
+
+/// The vertices of [`polytope_box`]'s polyhedron and how far each may lie
+/// from its computed place on every axis; `None` if it is unbounded or no
+/// vertex is found.
+fn polytope_vertices(solids: &[Solid]) -> Option<(Vec<Vector3<f64>>, f64)> {
     let planes: Vec<(Vector3<f64>, f64)> = solids
         .iter()
         .filter_map(|s| match s {
@@ -197,7 +247,7 @@ fn polytope_box(solids: &[Solid]) -> Aabb {
         })
         .collect();
     if planes.len() < 4 || planes.len() > 24 {
-        return Aabb::INFINITE;
+        return None;
     }
     // A direction of recession makes the polyhedron unbounded; treating
     // near-recession as recession only loses tightness, never correctness.
@@ -211,13 +261,13 @@ fn polytope_box(solids: &[Solid]) -> Aabb {
             }
             let d = d / m;
             if recedes(&d) || recedes(&-d) {
-                return Aabb::INFINITE;
+                return None;
             }
         }
     }
     let scale = planes.iter().fold(0.0f64, |m, (_, off)| m.max(off.abs()));
+    let mut vertices = Vec::new();
     let mut bx = Aabb::EMPTY;
-    let mut any = false;
     for a in 0..planes.len() {
         for b in a + 1..planes.len() {
             for c in b + 1..planes.len() {
@@ -238,22 +288,20 @@ fn polytope_box(solids: &[Solid]) -> Aabb {
                 // a too generous tolerance only adds a spurious far vertex.
                 let tol = (1e-9 + 1e-15 / det.abs()) * (scale + v.norm());
                 if planes.iter().all(|(n, off)| n.dot(&v) + off <= tol) {
-                    any = true;
+                    vertices.push(v);
                     bx = bx.union(&Aabb { min: Point3::from(v), max: Point3::from(v) });
                 }
             }
         }
     }
-    if !any {
+    if vertices.is_empty() {
         // Bounded but no vertex found: empty, or too degenerate to tell.
-        return Aabb::INFINITE;
+        return None;
     }
     let slack = 1e-8 * (bx.max - bx.min).norm()
         + WIDEN_ABS * 10.0 * (scale + bx.min.coords.amax().max(bx.max.coords.amax()))
         + f64::MIN_POSITIVE;
-    bx.min -= Vector3::repeat(slack);
-    bx.max += Vector3::repeat(slack);
-    bx
+    Some((vertices, slack))
 }
 
 /// The structure of a quadric whose cross-sections are bounded ellipses.
@@ -264,7 +312,9 @@ enum Core {
     /// `x = point + s·axis + q` with `q ⊥ axis` and `qᵀ A q <= r + spread·s²`:
     /// an elliptic cylinder (`spread = 0`), a cone (`r = 0`) or a hyperboloid,
     /// with `P` the pseudo-inverse of `A` on the plane across the axis.
-    Axial { point: Vector3<f64>, axis: Vector3<f64>, p: Matrix3<f64>, r: f64, spread: f64, margin: f64 },
+    /// `widest` bounds the largest eigenvalue of `P` (`1 / λ` for the
+    /// smaller of `A`'s two positive eigenvalues), so `|q|² <= widest · qᵀAq`.
+    Axial { point: Vector3<f64>, axis: Vector3<f64>, p: Matrix3<f64>, r: f64, spread: f64, margin: f64, widest: f64 },
 }
 
 /// The eigen-decomposition `A = V diag(λ) Vᵀ` of a symmetric 3×3 matrix by
@@ -386,7 +436,8 @@ fn core(q: &quadric::Quadric) -> Option<Core> {
         return Some(Core::Ellipsoid { centre: c.coords + d0, inverse: p, r: -1.0, margin });
     }
     // A two-sheet hyperboloid (r < 0) lies inside its asymptotic cone (r = 0).
-    Some(Core::Axial { point: c.coords + d0, axis, p, r: r.max(0.0), spread, margin })
+    let widest = (1.0 + margin) / l1;
+    Some(Core::Axial { point: c.coords + d0, axis, p, r: r.max(0.0), spread, margin, widest })
 }
 
 /// The analytic box of a quadric with bounded cross-sections: for an
@@ -395,10 +446,10 @@ fn core(q: &quadric::Quadric) -> Option<Core> {
 /// parameter the block's half-spaces allow, and the cross-section boxes at
 /// both ends (the extent `s·axisᵢ ± sqrt((r + spread·s²) Pᵢᵢ)` is convex in
 /// `s`, so its extremes over the range are at the ends).
-fn analytic_box(q: &quadric::Quadric, solids: &[Solid]) -> Aabb {
+fn analytic_box(q: &quadric::Quadric, solids: &[Solid]) -> (Aabb, Option<Ball>) {
     match core(q) {
-        None => Aabb::INFINITE,
-        Some(Core::Ellipsoid { r, .. }) if r < 0.0 => Aabb::EMPTY,
+        None => (Aabb::INFINITE, None),
+        Some(Core::Ellipsoid { r, .. }) if r < 0.0 => (Aabb::EMPTY, None),
         Some(Core::Ellipsoid { centre, inverse, r, margin }) => {
             let mut bx = Aabb::EMPTY;
             for i in 0..3 {
@@ -407,9 +458,9 @@ fn analytic_box(q: &quadric::Quadric, solids: &[Solid]) -> Aabb {
                 bx.min[i] = centre[i] - h - slack;
                 bx.max[i] = centre[i] + h + slack;
             }
-            bx
+            (bx, None)
         }
-        Some(Core::Axial { point, axis, p, r, spread, margin }) => {
+        Some(Core::Axial { point, axis, p, r, spread, margin, widest }) => {
             let (mut s0, mut s1) = (f64::NEG_INFINITY, f64::INFINITY);
             for s in solids {
                 let Solid::HalfSpace(h) = s else { continue };
@@ -418,11 +469,11 @@ fn analytic_box(q: &quadric::Quadric, solids: &[Solid]) -> Aabb {
                         s0 = s0.max(lo);
                         s1 = s1.min(hi);
                     }
-                    None => return Aabb::EMPTY,
+                    None => return (Aabb::EMPTY, None),
                 }
             }
             if s0 > s1 {
-                return Aabb::EMPTY;
+                return (Aabb::EMPTY, None);
             }
             if !(s0.is_finite() && s1.is_finite()) {
                 // Unbounded along the axis: only the axes across it are
@@ -444,7 +495,7 @@ fn analytic_box(q: &quadric::Quadric, solids: &[Solid]) -> Aabb {
                         }
                     }
                 }
-                return bx;
+                return (bx, None);
             }
             let mut bx = Aabb::EMPTY;
             for i in 0..3 {
@@ -456,7 +507,22 @@ fn analytic_box(q: &quadric::Quadric, solids: &[Solid]) -> Aabb {
                     bx.max[i] = bx.max[i].max(c + h + slack);
                 }
             }
-            bx
+            // The ball: every point is `point + s·axis + q` with `s` in
+            // `[s0, s1]` and `|q|² <= widest·(r + spread·s²)`, largest at an
+            // end; so it lies within `sqrt(half² + reach²)` of the axis
+            // point at the middle of the range.
+            let far = s0.abs().max(s1.abs());
+            let reach = (widest * (r + spread * far * far)).sqrt();
+            let (mid, half) = (0.5 * s0 + 0.5 * s1, 0.5 * s1 - 0.5 * s0);
+            let centre = point + axis * mid;
+            let radius = ((half * half + reach * reach).sqrt()
+                + margin * (reach + far)
+                + WIDEN_ABS * 10.0 * (centre.amax() + point.amax()))
+                * (1.0 + 1e-6)
+                + f64::MIN_POSITIVE;
+            let ball = (radius.is_finite() && centre.iter().all(|c| c.is_finite()))
+                .then_some(([centre.x, centre.y, centre.z], radius));
+            (bx, ball)
         }
     }
 }

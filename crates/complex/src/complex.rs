@@ -220,7 +220,7 @@ impl Complex {
                 return Err(ComplexError::BadEpsilon(e));
             }
         }
-        let boxes = block_boxes(&blocks);
+        let (boxes, balls) = block_boxes(&blocks);
         let mut bounded = Vec::new();
         let mut unbounded = Vec::new();
         for (i, b) in boxes.iter().enumerate() {
@@ -242,7 +242,7 @@ impl Complex {
             }
         });
         let bvh = Bvh::build(&bounded);
-        let kernel = Kernel::new(bvh.items(), &blocks);
+        let kernel = Kernel::new(bvh.items(), &blocks, &balls);
         let mut slot_of = vec![u32::MAX; blocks.len()];
         for k in 0..kernel.len() as u32 {
             slot_of[kernel.block(k) as usize] = k;

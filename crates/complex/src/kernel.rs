@@ -32,14 +32,16 @@ struct Slot {
 
 /// A ball that holds a block with room to spare: the ball around one of
 /// its solids that is an axis-aligned ellipsoid (every sphere, and every
-/// ellipsoid scaled along the axes and moved), grown far beyond rounding.
-/// A ray whose line passes it by more than a further margin meets none of
-/// the block's points, and its interval from the kernel is empty too: the
-/// kernel puts its ends within a few ulps of the true ones even where the
-/// ray grazes the surface, far inside the margins (`1e-6` of the radius
-/// and `1e-12` of the distance), so the reject answers what the solids
-/// would, without reading them. No ellipsoid: an infinite radius, which
-/// rejects nothing.
+/// ellipsoid scaled along the axes and moved), else the one the block's
+/// box came with (`bounds::block_bounds`: around a bounded polyhedron such
+/// as a rotated box of six half-spaces, or around a capped cylinder), each
+/// grown far beyond rounding. A ray whose line passes it by more than a
+/// further margin meets none of the block's points, and its interval from
+/// the kernel is empty too: the kernel puts its ends within a few ulps of
+/// the true ones even where the ray grazes the surface, far inside the
+/// margins (`1e-6` of the radius and `1e-12` of the distance), so the
+/// reject answers what the solids would, without reading them. No ball:
+/// an infinite radius, which rejects nothing.
 #[derive(Clone, Copy, Debug)]
 struct Ball {
     centre: [f64; 3],
@@ -100,8 +102,10 @@ pub(crate) struct Kernel {
 }
 
 impl Kernel {
-    /// Packs `blocks[order[k]]` into slot `k`.
-    pub(crate) fn new(order: &[u32], blocks: &[Block]) -> Self {
+    /// Packs `blocks[order[k]]` into slot `k`. `balls[i]`: a ball holding
+    /// block `i` from [`crate::bounds::block_boxes`] (missing entries: none),
+    /// kept where the block has no axis-aligned ellipsoid of its own.
+    pub(crate) fn new(order: &[u32], blocks: &[Block], balls: &[Option<crate::bounds::Ball>]) -> Self {
         // The arrays' sizes up front: grown by doubling, the 100,000-block
         // grid's 40 MB of solids took twice that in fresh pages and copies.
         let (mut half_spaces, mut quadrics) = (0, 0);
@@ -144,6 +148,9 @@ impl Kernel {
                     }
                 }
                 slot.count = solids.len() as u32;
+                if let (f64::INFINITY, Some(&Some((centre, radius)))) = (slot.ball.radius, balls.get(id as usize)) {
+                    slot.ball = Ball { centre, radius };
+                }
             }
             kernel.slots.push(slot);
         }
@@ -216,6 +223,7 @@ mod tests {
     use quadric::{strategies, Transform};
 
     use super::*;
+    use crate::bounds::block_boxes;
     use crate::{MaterialKey, Opacity};
 
     /// An axis-aligned ellipsoid (the unit sphere scaled along the axes and
@@ -245,7 +253,143 @@ mod tests {
         })
     }
 
+    /// A box of half sizes `e`, or a cylinder of radius `e[0]` and half
+    /// height `e[1]` along y capped by two planes, turned about x and y and
+    /// moved (near the origin or far from it), as scenes build them: the
+    /// block, and the points of it farthest from its middle (the box's
+    /// corners, points of the cylinder's rims) placed by the same transform,
+    /// independently of how the kernel's ball is found.
+    fn turned_block() -> impl Strategy<Value = (Block, Point3<f64>, Vec<Point3<f64>>)> {
+        let place = prop_oneof![Just(0.0), -5.0..5.0f64, -1e9..1e9f64];
+        (
+            any::<bool>(),
+            [0.05..2.0f64, 0.05..2.0, 0.05..2.0],
+            0.0..360.0f64,
+            0.0..360.0f64,
+            [place.clone(), place.clone(), place],
+        )
+            .prop_map(|(cylinder, e, ax, ay, at)| {
+                let m = Transform::rotate_x_degrees(ax)
+                    .and_then(|r| Ok(r.then(&Transform::rotate_y_degrees(ay)?)))
+                    .and_then(|r| Ok(r.then(&Transform::translate(Vector3::from(at))?)))
+                    .expect("finite");
+                let plane = |a: f64, b: f64, c: f64, d: f64| {
+                    Solid::from(HalfSpace::new(a, b, c, d).expect("valid").transformed(&m))
+                };
+                let (solids, local): (Vec<Solid>, Vec<Point3<f64>>) = if cylinder {
+                    let tube = Quadric::tube_y()
+                        .transformed(&Transform::scale_xyz(Vector3::new(e[0], 1.0, e[0])).expect("finite"));
+                    let rims = (0..16).flat_map(|k| {
+                        let a = f64::from(k) * std::f64::consts::PI / 8.0;
+                        [1.0, -1.0].map(|y| Point3::new(e[0] * a.cos(), y * e[1], e[0] * a.sin()))
+                    });
+                    (
+                        vec![
+                            Solid::from(tube.transformed(&m)),
+                            plane(0.0, 1.0, 0.0, -e[1]),
+                            plane(0.0, -1.0, 0.0, -e[1]),
+                        ],
+                        rims.collect(),
+                    )
+                } else {
+                    let faces = (0..3).flat_map(|i| {
+                        [1.0, -1.0].map(|sign| {
+                            let mut n = [0.0; 3];
+                            n[i] = sign;
+                            plane(n[0], n[1], n[2], -e[i])
+                        })
+                    });
+                    let corners = (0..8).map(|k: u32| {
+                        let sign = |bit: u32| if k & (1 << bit) != 0 { 1.0 } else { -1.0 };
+                        Point3::new(sign(0) * e[0], sign(1) * e[1], sign(2) * e[2])
+                    });
+                    (faces.collect(), corners.collect())
+                };
+                let block = Block::new("turned", solids, Opacity::Opaque, MaterialKey(0)).expect("valid");
+                (block, m.apply_point(&Point3::origin()), local.iter().map(|p| m.apply_point(p)).collect())
+            })
+    }
+
+    /// The kernel of one block, with the ball its box came with.
+    fn one_slot(block: &Block) -> Kernel {
+        let blocks = std::slice::from_ref(block);
+        Kernel::new(&[0], blocks, &block_boxes(blocks).1)
+    }
+
+    #[test]
+    fn balls_are_kept_where_they_are_smaller_than_the_box() {
+        let cube = |m: &Transform| {
+            let faces = (0..3).flat_map(|i| {
+                [1.0, -1.0].map(|sign| {
+                    let mut n = [0.0; 3];
+                    n[i] = sign;
+                    Solid::from(HalfSpace::new(n[0], n[1], n[2], -1.0).expect("valid").transformed(m))
+                })
+            });
+            Block::new("cube", faces.collect(), Opacity::Opaque, MaterialKey(0)).expect("valid")
+        };
+        let turned = Transform::rotate_x_degrees(30.0)
+            .expect("finite")
+            .then(&Transform::rotate_y_degrees(40.0).expect("finite"));
+        // Turned, the cube's box grows past its ball; upright, its ball
+        // (radius √3) is larger than its box, and rejects nothing more.
+        let ball = one_slot(&cube(&turned)).slots[0].ball;
+        assert!((ball.radius - 3f64.sqrt()).abs() < 1e-5 && ball.centre.iter().all(|c| c.abs() < 1e-9), "{ball:?}");
+        assert_eq!(one_slot(&cube(&Transform::identity())).slots[0].ball.radius, f64::INFINITY);
+        // A long upright cylinder: its ball is far larger than its box.
+        let pole = vec![
+            Solid::from(
+                Quadric::tube_y().transformed(&Transform::scale_xyz(Vector3::new(0.1, 1.0, 0.1)).expect("finite")),
+            ),
+            Solid::from(HalfSpace::new(0.0, 1.0, 0.0, -2.0).expect("valid")),
+            Solid::from(HalfSpace::new(0.0, -1.0, 0.0, -2.0).expect("valid")),
+        ];
+        let pole = Block::new("pole", pole, Opacity::Opaque, MaterialKey(0)).expect("valid");
+        assert_eq!(one_slot(&pole).slots[0].ball.radius, f64::INFINITY);
+    }
+
     proptest! {
+        /// A turned box's corners and a turned capped cylinder's rims lie in
+        /// the ball the kernel keeps for it, which is centred on the block.
+        #[test]
+        fn the_ball_of_a_turned_block_holds_its_farthest_points((block, middle, far) in turned_block()) {
+            let ball = one_slot(&block).slots[0].ball;
+            if ball.radius < f64::INFINITY {
+                let c = Point3::from(ball.centre);
+                prop_assert!((c - middle).norm() <= 1e-9 * ball.radius + 1e-12 * middle.coords.amax(), "centre {:?}, middle {:?}", c, middle);
+                for p in &far {
+                    prop_assert!((p - c).norm() <= ball.radius, "{:?} is {} from the centre, radius {}", p, (p - c).norm(), ball.radius);
+                }
+            }
+        }
+
+        /// Rays across a turned block's farthest points, just inside the
+        /// block (where the ball is tightest) and just outside it, at right
+        /// angles to the radius there (so that the line comes nearest the
+        /// ball's centre at that point): the reject answers exactly what the
+        /// solids do.
+        #[test]
+        fn the_ball_of_a_turned_block_rejects_only_rays_the_solids_miss(
+            (block, _, far) in turned_block(),
+            aims in proptest::collection::vec((0usize..32, strategies::unit_vector(), prop_oneof![-1e-3..1e-3f64, -1e-6..1e-6f64, -1e-9..1e-9f64], 0.5..1e3f64), 16),
+        ) {
+            let kernel = one_slot(&block);
+            let ball = kernel.slots[0].ball;
+            let c = Point3::from(ball.centre);
+            for (k, dir, inside, back) in &aims {
+                let v = far[k % far.len()];
+                let radial = v - c;
+                // A direction at right angles to the radius.
+                let Some(across) = dir.cross(&radial).try_normalize(1e-9) else { continue };
+                let aim = c + radial * (1.0 - inside);
+                let Ok(ray) = Ray::new(aim - across * (back * radial.norm()), across) else { continue };
+                let mut packed = Spans::Empty;
+                kernel.spans_into(0, &ray, std::slice::from_ref(&block), &mut packed);
+                let plain = block.spans(&ray);
+                prop_assert_eq!(packed.as_slice(), plain.as_slice(), "inside by {}", inside);
+            }
+        }
+
         /// Every point of an axis-aligned ellipsoid lies in its ball, with
         /// linear terms too.
         #[test]
@@ -294,7 +438,8 @@ mod tests {
                 solids.push(Solid::from(HalfSpace::new(0.0, 1.0, 0.0, -(c[1] + h * size)).expect("valid")));
             }
             let block = Block::new("b", solids, Opacity::Opaque, MaterialKey(0)).expect("valid");
-            let kernel = Kernel::new(&[0], std::slice::from_ref(&block));
+            let blocks = std::slice::from_ref(&block);
+            let kernel = Kernel::new(&[0], blocks, &block_boxes(blocks).1);
             let ball = kernel.slots[0].ball;
             prop_assert!(ball.radius.is_finite());
             for (dir, along, off, back) in &aims {
@@ -325,7 +470,7 @@ mod tests {
             // Any order of the blocks, as a BVH's leaves would give.
             let mut order: Vec<u32> = (0..blocks.len() as u32).collect();
             order.rotate_left((order_seed % blocks.len() as u64) as usize);
-            let kernel = Kernel::new(&order, &blocks);
+            let kernel = Kernel::new(&order, &blocks, &block_boxes(&blocks).1);
             for ray in &rays {
                 for k in 0..order.len() as u32 {
                     let id = kernel.block(k);
