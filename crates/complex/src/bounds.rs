@@ -145,7 +145,8 @@ pub(crate) fn block_boxes(blocks: &[crate::Block]) -> (Vec<Aabb>, Vec<Option<Bal
 /// a quadric with bounded cross-sections cut to a finite length by the
 /// half-spaces (a capped cylinder). Each holds a superset of the block, so
 /// the block; `None` if neither is found or the ball's volume is not below
-/// the box's (an ellipsoid's ball is the kernel's own, see `kernel.rs`).
+/// 1.5 times the box's (an ellipsoid's ball is the kernel's own, see
+/// `kernel.rs`).
 /// Computed here because the box needs the same vertices and axes.
 pub(crate) fn block_bounds(solids: &[Solid]) -> (Aabb, Option<Ball>) {
     let smaller = |a: Option<Ball>, b: Option<Ball>| match (a, b) {
@@ -192,9 +193,11 @@ pub(crate) fn block_bounds(solids: &[Solid]) -> (Aabb, Option<Ball>) {
             break;
         }
     }
-    // A ball no smaller than the box (an axis-aligned box or a long
-    // upright cylinder) would cost its test on every visit and reject
-    // almost nothing the box has not: only smaller ones are kept.
+    // A ball much larger than the box (an axis-aligned box's is 2.7 times
+    // its volume, a long upright cylinder's far more) would cost its test
+    // on every visit and reject almost nothing the box has not. Below 1.5
+    // times the box, the grid's turned boxes and cylinders keep nearly all
+    // their gain and the table nothing (`docs/benchmarks.md`, sixth session).
     let volume = (0..3).map(|i| bx.max[i] - bx.min[i]).product::<f64>();
     let ball = ball.filter(|b| 4.0 / 3.0 * std::f64::consts::PI * b.1.powi(3) < 1.5 * volume);
     (bx, ball)
