@@ -119,9 +119,15 @@ fn widen_up(x: f64, local: f64, abs: f64) -> f64 {
     x + WIDEN * local + WIDEN_ABS * (x.abs() + abs) + f64::MIN_POSITIVE
 }
 
-/// A ball `(centre, radius)` that holds a block with room to spare (see
-/// [`block_bounds`]).
-pub(crate) type Ball = ([f64; 3], f64);
+/// A ball that holds a block with room to spare, for the kernel's cheap
+/// reject (`kernel.rs`): found here with the block's box for a bounded
+/// polyhedron or a capped cylinder ([`block_bounds`]), or by the kernel for
+/// an axis-aligned ellipsoid. An infinite radius stands for no ball.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Ball {
+    pub(crate) centre: [f64; 3],
+    pub(crate) radius: f64,
+}
 
 /// The box and ball of each block, in order ([`block_bounds`]). Each
 /// depends on its block alone, so large scenes compute them in parallel
@@ -150,7 +156,7 @@ pub(crate) fn block_boxes(blocks: &[crate::Block]) -> (Vec<Aabb>, Vec<Option<Bal
 /// Computed here because the box needs the same vertices and axes.
 pub(crate) fn block_bounds(solids: &[Solid]) -> (Aabb, Option<Ball>) {
     let smaller = |a: Option<Ball>, b: Option<Ball>| match (a, b) {
-        (Some(x), Some(y)) => Some(if y.1 < x.1 { y } else { x }),
+        (Some(x), Some(y)) => Some(if y.radius < x.radius { y } else { x }),
         (x, y) => x.or(y),
     };
     let mut bx = Aabb::INFINITE;
@@ -199,7 +205,7 @@ pub(crate) fn block_bounds(solids: &[Solid]) -> (Aabb, Option<Ball>) {
     // times the box, the grid's turned boxes and cylinders keep nearly all
     // their gain and the table nothing (`docs/benchmarks.md`, sixth session).
     let volume = (0..3).map(|i| bx.max[i] - bx.min[i]).product::<f64>();
-    let ball = ball.filter(|b| 4.0 / 3.0 * std::f64::consts::PI * b.1.powi(3) < 1.5 * volume);
+    let ball = ball.filter(|b| 4.0 / 3.0 * std::f64::consts::PI * b.radius.powi(3) < 1.5 * volume);
     (bx, ball)
 }
 
@@ -213,11 +219,7 @@ pub(crate) fn block_bounds(solids: &[Solid]) -> (Aabb, Option<Ball>) {
 /// rounding noise far away; a vertex that only such a triple forms (a spike
 /// sharper than 10⁻¹⁰ rad) is the one case this does not cover.
 fn polytope_box(solids: &[Solid]) -> (Aabb, Option<Ball>) {
-    let Some((vertices, slack)) = polytope_vertices(solids) else { return (Aabb::INFINITE, None) };
-    let mut bx = Aabb::EMPTY;
-    for v in &vertices {
-        bx = bx.union(&Aabb { min: Point3::from(*v), max: Point3::from(*v) });
-    }
+    let Some((vertices, mut bx, slack)) = polytope_vertices(solids) else { return (Aabb::INFINITE, None) };
     // The ball: around the middle of the vertices' box, out to the farthest
     // vertex. Every point of the polyhedron lies in the hull of its
     // vertices, each within `slack` of its computed place on every axis, so
@@ -226,16 +228,16 @@ fn polytope_box(solids: &[Solid]) -> (Aabb, Option<Ball>) {
     let reach = vertices.iter().fold(0.0f64, |m, v| m.max((v - centre).norm()));
     let radius = (reach + 2.0 * slack) * (1.0 + 1e-6);
     let ball = (radius.is_finite() && centre.iter().all(|c| c.is_finite()))
-        .then_some(([centre.x, centre.y, centre.z], radius));
+        .then_some(Ball { centre: [centre.x, centre.y, centre.z], radius });
     bx.min -= Vector3::repeat(slack);
     bx.max += Vector3::repeat(slack);
     (bx, ball)
 }
 
-/// The vertices of [`polytope_box`]'s polyhedron and how far each may lie
-/// from its computed place on every axis; `None` if it is unbounded or no
-/// vertex is found.
-fn polytope_vertices(solids: &[Solid]) -> Option<(Vec<Vector3<f64>>, f64)> {
+/// The vertices of [`polytope_box`]'s polyhedron, their box, and how far
+/// each may lie from its computed place on every axis; `None` if it is
+/// unbounded or no vertex is found.
+fn polytope_vertices(solids: &[Solid]) -> Option<(Vec<Vector3<f64>>, Aabb, f64)> {
     let planes: Vec<(Vector3<f64>, f64)> = solids
         .iter()
         .filter_map(|s| match s {
@@ -304,7 +306,7 @@ fn polytope_vertices(solids: &[Solid]) -> Option<(Vec<Vector3<f64>>, f64)> {
     let slack = 1e-8 * (bx.max - bx.min).norm()
         + WIDEN_ABS * 10.0 * (scale + bx.min.coords.amax().max(bx.max.coords.amax()))
         + f64::MIN_POSITIVE;
-    Some((vertices, slack))
+    Some((vertices, bx, slack))
 }
 
 /// The structure of a quadric whose cross-sections are bounded ellipses.
@@ -524,7 +526,7 @@ fn analytic_box(q: &quadric::Quadric, solids: &[Solid]) -> (Aabb, Option<Ball>) 
                 * (1.0 + 1e-6)
                 + f64::MIN_POSITIVE;
             let ball = (radius.is_finite() && centre.iter().all(|c| c.is_finite()))
-                .then_some(([centre.x, centre.y, centre.z], radius));
+                .then_some(Ball { centre: [centre.x, centre.y, centre.z], radius });
             (bx, ball)
         }
     }

@@ -11,6 +11,7 @@
 use quadric::{HalfSpace, Precision, Quadric, Ray, Solid};
 
 use crate::block::{convex_spans, SolidRef, Spans};
+use crate::bounds::Ball;
 use crate::Block;
 
 /// One block in leaf order.
@@ -30,24 +31,18 @@ struct Slot {
     ball: Ball,
 }
 
-/// A ball that holds a block with room to spare: the ball around one of
-/// its solids that is an axis-aligned ellipsoid (every sphere, and every
-/// ellipsoid scaled along the axes and moved), else the one the block's
-/// box came with (`bounds::block_bounds`: around a bounded polyhedron such
-/// as a rotated box of six half-spaces, or around a capped cylinder), each
-/// grown far beyond rounding. A ray whose line passes it by more than a
-/// further margin meets none of the block's points, and its interval from
-/// the kernel is empty too: the kernel puts its ends within a few ulps of
-/// the true ones even where the ray grazes the surface, far inside the
-/// margins (`1e-6` of the radius and `1e-12` of the distance), so the
-/// reject answers what the solids would, without reading them. No ball:
-/// an infinite radius, which rejects nothing.
-#[derive(Clone, Copy, Debug)]
-struct Ball {
-    centre: [f64; 3],
-    radius: f64,
-}
-
+/// The slot's ball ([`crate::bounds::Ball`]): the ball around one of the
+/// block's solids that is an axis-aligned ellipsoid (every sphere, and
+/// every ellipsoid scaled along the axes and moved), else the one the
+/// block's box came with (`bounds::block_bounds`: around a bounded
+/// polyhedron such as a rotated box of six half-spaces, or around a capped
+/// cylinder), each grown far beyond rounding. A ray whose line passes it by
+/// more than a further margin meets none of the block's points, and its
+/// interval from the kernel is empty too: the kernel puts its ends within a
+/// few ulps of the true ones even where the ray grazes the surface, far
+/// inside the margins (`1e-6` of the radius and `1e-12` of the distance),
+/// so the reject answers what the solids would, without reading them. No
+/// ball: an infinite radius, which rejects nothing.
 impl Ball {
     const NONE: Ball = Ball { centre: [0.0; 3], radius: f64::INFINITY };
 
@@ -105,14 +100,17 @@ impl Kernel {
     /// Packs `blocks[order[k]]` into slot `k`. `balls[i]`: a ball holding
     /// block `i` from [`crate::bounds::block_boxes`] (missing entries: none),
     /// kept where the block has no axis-aligned ellipsoid of its own.
-    pub(crate) fn new(order: &[u32], blocks: &[Block], balls: &[Option<crate::bounds::Ball>]) -> Self {
+    pub(crate) fn new(order: &[u32], blocks: &[Block], balls: &[Option<Ball>]) -> Self {
+        // Convex blocks of at most 32 solids are packed; others are answered
+        // by `Block::spans`.
+        let packed = |block: &Block| block.is_convex() && block.solids().len() <= 32;
         // The arrays' sizes up front: grown by doubling, the 100,000-block
         // grid's 28 MB of solids took 107 MB of allocations (fresh pages and
         // a copy each time).
         let (mut half_spaces, mut quadrics) = (0, 0);
         for &id in order {
             let block = &blocks[id as usize];
-            if block.is_convex() && block.solids().len() <= 32 {
+            if packed(block) {
                 let q = block.solids().iter().filter(|s| matches!(s, Solid::Quadric(_))).count();
                 quadrics += q;
                 half_spaces += block.solids().len() - q;
@@ -135,7 +133,7 @@ impl Kernel {
                 count: 0,
                 ball: Ball::NONE,
             };
-            if block.is_convex() && solids.len() <= 32 {
+            if packed(block) {
                 for (i, s) in solids.iter().enumerate() {
                     match s {
                         Solid::HalfSpace(h) => kernel.half_spaces.push(*h),
@@ -149,8 +147,8 @@ impl Kernel {
                     }
                 }
                 slot.count = solids.len() as u32;
-                if let (f64::INFINITY, Some(&Some((centre, radius)))) = (slot.ball.radius, balls.get(id as usize)) {
-                    slot.ball = Ball { centre, radius };
+                if let (f64::INFINITY, Some(&Some(ball))) = (slot.ball.radius, balls.get(id as usize)) {
+                    slot.ball = ball;
                 }
             }
             kernel.slots.push(slot);
