@@ -439,7 +439,7 @@ pub(crate) fn convex_spans<'a>(
         // Ties between solids are settled exactly on the general path.
         return None;
     }
-    let (mut enter, mut exit) = (Bound::free(0.0), Bound::free(f64::INFINITY));
+    let mut meet = Meet::ALL;
     for (i, s) in solids.enumerate() {
         let (e, x) = match s {
             SolidRef::HalfSpace(h) => h.interval_with(ray, i as u32, precision),
@@ -449,18 +449,44 @@ pub(crate) fn convex_spans<'a>(
                 _ => return None,
             },
         };
-        if e.t > enter.t {
-            enter = e;
-        }
-        if x.t < exit.t {
-            exit = x;
-        }
-        // Not less (equal, greater or NaN): empty, like `IntervalSet`.
-        if enter.t.partial_cmp(&exit.t) != Some(core::cmp::Ordering::Less) {
+        if !meet.with(e, x) {
             return Some(Spans::Empty);
         }
     }
-    Some(Spans::One(Interval::new(enter, exit)))
+    Some(meet.spans())
+}
+
+/// The running intersection of convex solids' intervals, given in block
+/// order: two bounds, narrowed by the same comparisons in the same order as
+/// `IntervalSet::intersect` (on equal `t` the earlier solid's end is kept).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Meet {
+    enter: Bound,
+    exit: Bound,
+}
+
+impl Meet {
+    /// The whole ray, `[0, ∞)`.
+    pub(crate) const ALL: Meet = Meet { enter: Bound::free(0.0), exit: Bound::free(f64::INFINITY) };
+
+    /// Narrows to the next solid's interval `[e, x]`; `false` once empty.
+    #[inline(always)]
+    pub(crate) fn with(&mut self, e: Bound, x: Bound) -> bool {
+        if e.t > self.enter.t {
+            self.enter = e;
+        }
+        if x.t < self.exit.t {
+            self.exit = x;
+        }
+        // Not less (equal, greater or NaN): empty, like `IntervalSet`.
+        self.enter.t.partial_cmp(&self.exit.t) == Some(core::cmp::Ordering::Less)
+    }
+
+    /// The interval, non-empty as long as every [`Meet::with`] said so.
+    #[inline(always)]
+    pub(crate) fn spans(self) -> Spans {
+        Spans::One(Interval::new(self.enter, self.exit))
+    }
 }
 
 /// Where an end at `end` goes once it is ordered exactly against another

@@ -101,33 +101,48 @@ impl HalfSpace {
     /// inside the half-space: the allocation-free fast path blocks use.
     #[inline(always)]
     pub fn interval(&self, ray: &Ray, solid: u32) -> (Bound, Bound) {
+        self.interval_rebased(ray, &Rebased::new(ray, &self.reference_point()), solid)
+    }
+
+    /// [`HalfSpace::interval`] from the ray re-based at this half-space's
+    /// reference point, which half-spaces around the same point share (a
+    /// box's six faces): the same value, bit for bit.
+    #[inline(always)]
+    pub fn interval_rebased(&self, ray: &Ray, at: &Rebased, solid: u32) -> (Bound, Bound) {
         let t = self.slope(&ray.direction());
-        // `u` is taken at the ray's point `λ₀` nearest to `o`, so the root is
-        // as accurate far away as near (see `docs/quadric.md`).
-        let (lambda0, u) = self.value_near(ray);
-        let none = (Bound::free(f64::INFINITY), Bound::free(f64::INFINITY));
-        let all = (Bound::free(0.0), Bound::free(f64::INFINITY));
-        if t == 0.0 || !t.is_finite() {
-            return if u <= 0.0 { all } else { none };
-        }
-        // `+ 0.0` turns a root of -0.0 (u = -0.0 on the plane) into +0.0.
-        let root = -u / t + 0.0;
-        if !root.is_finite() {
-            return if u <= 0.0 { all } else { none };
-        }
-        let root = lambda0 + root;
-        if t > 0.0 {
-            // Inside before the plane.
-            if root < 0.0 {
-                none
-            } else {
-                (Bound::free(0.0), Bound::new(root, solid))
-            }
-        } else if root < 0.0 {
-            all
-        } else {
-            (Bound::new(root, solid), Bound::free(f64::INFINITY))
-        }
+        let u = self.normal.dot(&at.base) + (self.d + self.normal.dot(&at.lo));
+        crossing(t, at.lambda0, u, solid)
+    }
+
+    /// `Some(d)` if `other` is `-n·(x - o) + d <= 0`, the opposite of this
+    /// half-space (together a slab: a box's two faces on one axis, a
+    /// cylinder's two caps): a normal of equal components with the opposite
+    /// sign, the same reference point bit for bit. A zero component may have
+    /// either sign (a scene's `[0, -1, 0, d]` is no bitwise negation of
+    /// `[0, 1, 0, d']`); no interval tells them apart, so
+    /// [`HalfSpace::slab_intervals`] answers for `other` bit for bit.
+    pub fn opposite_offset(&self, other: &HalfSpace) -> Option<f64> {
+        let bits = |v: &Vector3<f64>| v.map(f64::to_bits);
+        (other.normal == -self.normal && bits(&other.origin) == bits(&self.origin)).then_some(other.d)
+    }
+
+    /// `[self.interval(ray, solid), other.interval(ray, solid + 1)]` for the
+    /// opposite `other` with offset `d` ([`HalfSpace::opposite_offset`]),
+    /// bit for bit, at little more than the cost of one. Negating the normal negates every product and sum of the slope
+    /// and of both dot products exactly (IEEE rounding is symmetric in sign,
+    /// and so are Dot2's error terms), so `t' = -t` and
+    /// `u' = -(n·base) + (d - n·lo)`. A zero component of either sign only
+    /// changes the sign of a zero `t'` or `u'`, which no branch and no
+    /// root tells apart (`t = ±0` is a parallel ray, `u = ±0` gives the root
+    /// `+0`).
+    #[inline(always)]
+    pub fn slab_intervals(&self, d: f64, ray: &Ray, at: &Rebased, solid: u32) -> [(Bound, Bound); 2] {
+        let t = self.slope(&ray.direction());
+        let (on_base, on_lo) = (self.normal.dot(&at.base), self.normal.dot(&at.lo));
+        [
+            crossing(t, at.lambda0, on_base + (self.d + on_lo), solid),
+            crossing(-t, at.lambda0, -on_base + (d - on_lo), solid + 1),
+        ]
     }
 
     /// `t = n·r`; nearly parallel to the plane it cancels from `|n|` down to
@@ -142,24 +157,63 @@ impl HalfSpace {
         let (t, t_lo) = dot2(&self.normal, r);
         t + t_lo
     }
+}
 
-    /// `(λ₀, f(p + λ₀r))` for the foot `λ₀ = -r·(p - o)` of the perpendicular
-    /// from `o` onto the ray, the same exact re-basing as
-    /// `Quadric::intervals`: the base point `(p - o) + λ₀r` is formed by one
-    /// FMA at the scale of `|x - o|` for any point `x` of the line, and the
-    /// rounding of `p - o` (half an ulp of the distance) is recovered by
-    /// TwoSum and added back.
+/// The interval of `λ >= 0` inside a half-space with slope `t = n·r` and
+/// value `u = f(p + λ₀r)`: before the root `λ₀ - u/t` if `t > 0`, after it
+/// if `t < 0`, all or nothing on a parallel ray.
+#[inline(always)]
+fn crossing(t: f64, lambda0: f64, u: f64, solid: u32) -> (Bound, Bound) {
+    let none = (Bound::free(f64::INFINITY), Bound::free(f64::INFINITY));
+    let all = (Bound::free(0.0), Bound::free(f64::INFINITY));
+    if t == 0.0 || !t.is_finite() {
+        return if u <= 0.0 { all } else { none };
+    }
+    // `+ 0.0` turns a root of -0.0 (u = -0.0 on the plane) into +0.0.
+    let root = -u / t + 0.0;
+    if !root.is_finite() {
+        return if u <= 0.0 { all } else { none };
+    }
+    let root = lambda0 + root;
+    if t > 0.0 {
+        // Inside before the plane.
+        if root < 0.0 {
+            none
+        } else {
+            (Bound::free(0.0), Bound::new(root, solid))
+        }
+    } else if root < 0.0 {
+        all
+    } else {
+        (Bound::new(root, solid), Bound::free(f64::INFINITY))
+    }
+}
+
+/// A ray re-based at a reference point `o`, the part of
+/// [`HalfSpace::interval`] that every half-space stored around `o` shares:
+/// the foot `λ₀ = -r·(p - o)` of the perpendicular from `o` onto the ray, so
+/// that `u` is taken near `o` and the root is as accurate far away as near
+/// (see `docs/quadric.md`). The base point `(p - o) + λ₀r` is formed by one
+/// FMA at the scale of `|x - o|` for any point `x` of the line, and the
+/// rounding of `p - o` (half an ulp of the distance) is recovered by TwoSum
+/// and added back, the same exact re-basing as `Quadric::intervals`.
+#[derive(Clone, Copy, Debug)]
+pub struct Rebased {
+    lambda0: f64,
+    base: Vector3<f64>,
+    lo: Vector3<f64>,
+}
+
+impl Rebased {
+    /// `ray` re-based at `origin`.
     #[inline(always)]
-    fn value_near(&self, ray: &Ray) -> (f64, f64) {
-        let (p, r) = (ray.origin().coords, ray.direction());
-        let d = p - self.origin;
+    pub fn new(ray: &Ray, origin: &Point3<f64>) -> Self {
+        let (p, r, o) = (ray.origin().coords, ray.direction(), origin.coords);
+        let d = p - o;
         let lambda0 = -r.dot(&d);
         let base = Vector3::new(lambda0.mul_add(r.x, d.x), lambda0.mul_add(r.y, d.y), lambda0.mul_add(r.z, d.z));
-        let lo = Vector3::new(
-            two_sum_error(p.x, -self.origin.x, d.x),
-            two_sum_error(p.y, -self.origin.y, d.y),
-            two_sum_error(p.z, -self.origin.z, d.z),
-        );
-        (lambda0, self.normal.dot(&base) + (self.d + self.normal.dot(&lo)))
+        let lo =
+            Vector3::new(two_sum_error(p.x, -o.x, d.x), two_sum_error(p.y, -o.y, d.y), two_sum_error(p.z, -o.z, d.z));
+        Rebased { lambda0, base, lo }
     }
 }

@@ -36,7 +36,7 @@ pub mod strategies;
 mod transform;
 
 pub use error::GeometryError;
-pub use halfspace::HalfSpace;
+pub use halfspace::{HalfSpace, Rebased};
 pub use interval::{Bound, CapacityError, Interval, IntervalSet, Pieces, NO_SOLID};
 pub use nalgebra;
 pub use quadric::precision::{CertifiedIntervals, CertifiedRoot, Precision};

@@ -5,5 +5,6 @@ mod bad_input;
 mod fuzz_regressions;
 mod laws;
 mod oracle;
+mod slab;
 mod stress;
 mod table;
