@@ -40,14 +40,26 @@ struct Slot {
 /// A packed half-space and, where the slot's `pair_mask` says so, its
 /// opposite `-n·(x - o) + opposite <= 0`, the block's next solid: one slab,
 /// whose two intervals [`HalfSpace::slab_intervals`] finds for little more
-/// than the cost of one, in 64 bytes instead of 112. (The opposite itself,
-/// which only its hits and `Precision::Fast` read, is kept apart, in
-/// `Kernel::seconds`.)
+/// than the cost of one, in 64 bytes instead of 112: one cache line, to
+/// which it is aligned (unaligned, most faces would straddle two). The
+/// opposite itself, which only its hits and `Precision::Fast` read, is
+/// kept apart, in `Kernel::seconds`.
 #[derive(Clone, Copy, Debug)]
+#[repr(align(64))]
 struct Face {
     half_space: HalfSpace,
     opposite: f64,
 }
+
+// One line, no padding: a half-space and the opposite's offset fill it.
+const _: () = assert!(core::mem::size_of::<Face>() == 64);
+
+/// A packed quadric on whole cache lines: 192 bytes, three lines, where
+/// an array of plain `Quadric`s (aligned to 8 or 16 bytes) puts most of
+/// them across four.
+#[derive(Clone, Copy, Debug)]
+#[repr(align(64))]
+struct Lines(Quadric);
 
 /// The slot's ball ([`crate::bounds::Ball`]): the ball around one of the
 /// block's solids that is an axis-aligned ellipsoid (every sphere, and
@@ -111,7 +123,7 @@ pub(crate) struct Kernel {
     faces: Vec<Face>,
     /// Each face's opposite, if it holds one, else its own half-space again.
     seconds: Vec<HalfSpace>,
-    quadrics: Vec<Quadric>,
+    quadrics: Vec<Lines>,
     /// The precision mode of every query (`Complex::set_precision`).
     pub(crate) precision: Precision,
 }
@@ -179,7 +191,7 @@ impl Kernel {
             if packed(block) {
                 for (i, s) in solids.iter().enumerate() {
                     if let Solid::Quadric(q) = s {
-                        kernel.quadrics.push(*q);
+                        kernel.quadrics.push(Lines(*q));
                         slot.quadric_mask |= 1 << i;
                         if slot.ball.radius == f64::INFINITY {
                             slot.ball = Ball::of(q).unwrap_or(Ball::NONE);
@@ -226,7 +238,7 @@ impl Kernel {
         let below = (1u32 << i) - 1;
         Some(if slot.quadric_mask & (1 << i) != 0 {
             // The quadrics before `i` come first in their array.
-            SolidRef::Quadric(&self.quadrics[(slot.quadric + (slot.quadric_mask & below).count_ones()) as usize])
+            SolidRef::Quadric(&self.quadrics[(slot.quadric + (slot.quadric_mask & below).count_ones()) as usize].0)
         } else {
             // One face for each half-space before `i` that is not a slab's second.
             let seconds = slot.pair_mask << 1;
@@ -278,7 +290,7 @@ impl Kernel {
         while i < slot.count {
             let met = if slot.quadric_mask & (1 << i) != 0 {
                 q += 1;
-                match *self.quadrics[q - 1].pieces_with(ray, i, precision).as_slice() {
+                match *self.quadrics[q - 1].0.pieces_with(ray, i, precision).as_slice() {
                     [] => false,
                     [iv] => meet.with(iv.enter, iv.exit),
                     _ => return None,
