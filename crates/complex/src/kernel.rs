@@ -275,12 +275,12 @@ impl Kernel {
         blocks[slot.block as usize].spans_general_into(ray, out);
     }
 
-    /// [`convex_spans`](crate::block::convex_spans) from the packed solids, in [`Precision::Fast`] or
-    /// [`Precision::Accurate`]: the same intervals met in the same order;
-    /// `None` if a quadric gave more than one interval after all. In
-    /// `Accurate` a slab's two at once, and the ray re-based once for
-    /// consecutive faces around one reference point; in `Fast`, which
-    /// evaluates at the ray's origin, one at a time.
+    /// [`convex_spans`](crate::block::convex_spans) from the packed
+    /// solids, in [`Precision::Fast`] or [`Precision::Accurate`]: the same
+    /// intervals met in the same order; `None` if a quadric gave more than
+    /// one interval after all. In `Accurate` a slab's two at once, and the
+    /// ray re-based once for consecutive faces around one reference point;
+    /// in `Fast`, which evaluates at the ray's origin, one at a time.
     #[inline(always)]
     fn packed_spans<const FAST: bool>(&self, slot: &Slot, ray: &Ray) -> Option<Spans> {
         let precision = if FAST { Precision::Fast } else { Precision::Accurate };
@@ -430,7 +430,8 @@ mod tests {
     /// The kernel of one block, with the ball its box came with.
     /// Blocks with opposite half-spaces in a row: a box's three slabs, or a
     /// tube between two caps, each possibly with a lone half-space (around a
-    /// reference point of its own) or a sphere among them, axis-aligned or turned, near the origin or far.
+    /// reference point of its own) or a sphere among them, axis-aligned or
+    /// turned, near the origin or far.
     fn slab_solids() -> impl Strategy<Value = Vec<Solid>> {
         let slab = (0usize..3, -0.5f64..-0.05, -0.5f64..-0.05).prop_map(|(axis, d0, d1)| {
             let mut n = [0.0; 3];

@@ -128,13 +128,13 @@ impl HalfSpace {
 
     /// `[self.interval(ray, solid), other.interval(ray, solid + 1)]` for the
     /// opposite `other` with offset `d` ([`HalfSpace::opposite_offset`]),
-    /// bit for bit, at little more than the cost of one. Negating the normal negates every product and sum of the slope
-    /// and of both dot products exactly (IEEE rounding is symmetric in sign,
-    /// and so are Dot2's error terms), so `t' = -t` and
-    /// `u' = -(n·base) + (d - n·lo)`. A zero component of either sign only
-    /// changes the sign of a zero `t'` or `u'`, which no branch and no
-    /// root tells apart (`t = ±0` is a parallel ray, `u = ±0` gives the root
-    /// `+0`).
+    /// bit for bit, at little more than the cost of one. Negating the
+    /// normal negates every product and sum of the slope and of both dot
+    /// products exactly (IEEE rounding is symmetric in sign, and so are
+    /// Dot2's error terms), so `t' = -t` and `u' = -(n·base) + (d - n·lo)`.
+    /// A zero component of either sign only changes the sign of a zero `t'`
+    /// or `u'`, which no branch and no root tells apart (`t = ±0` is a
+    /// parallel ray, `u = ±0` gives the root `+0`).
     #[inline(always)]
     pub fn slab_intervals(&self, d: f64, ray: &Ray, at: &Rebased, solid: u32) -> [(Bound, Bound); 2] {
         let t = self.slope(&ray.direction());
