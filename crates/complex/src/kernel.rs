@@ -427,7 +427,6 @@ mod tests {
             })
     }
 
-    /// The kernel of one block, with the ball its box came with.
     /// Blocks with opposite half-spaces in a row: a box's three slabs, or a
     /// tube between two caps, each possibly with a lone half-space (around a
     /// reference point of its own) or a sphere among them, axis-aligned or
@@ -480,6 +479,7 @@ mod tests {
             .collect()
     }
 
+    /// The kernel of one block, with the ball its box came with.
     fn one_slot(block: &Block) -> Kernel {
         let blocks = std::slice::from_ref(block);
         Kernel::new(&[0], blocks, &block_boxes(blocks).1)
