@@ -1,6 +1,6 @@
 //! Blocks: intersections of solids.
 
-use quadric::{Bound, HalfSpace, Interval, IntervalSet, Precision, Quadric, Ray, Solid};
+use quadric::{Bound, HalfSpace, Interval, IntervalSet, Pieces, Precision, Quadric, Ray, Solid};
 
 use crate::ComplexError;
 
@@ -441,15 +441,14 @@ pub(crate) fn convex_spans<'a>(
     }
     let mut meet = Meet::ALL;
     for (i, s) in solids.enumerate() {
-        let (e, x) = match s {
-            SolidRef::HalfSpace(h) => h.interval_with(ray, i as u32, precision),
-            SolidRef::Quadric(q) => match *q.pieces_with(ray, i as u32, precision).as_slice() {
-                [] => return Some(Spans::Empty),
-                [iv] => (iv.enter, iv.exit),
-                _ => return None,
-            },
+        let met = match s {
+            SolidRef::HalfSpace(h) => {
+                let (e, x) = h.interval_with(ray, i as u32, precision);
+                meet.with(e, x)
+            }
+            SolidRef::Quadric(q) => meet.with_pieces(&q.pieces_with(ray, i as u32, precision))?,
         };
-        if !meet.with(e, x) {
+        if !met {
             return Some(Spans::Empty);
         }
     }
@@ -480,6 +479,17 @@ impl Meet {
         }
         // Not less (equal, greater or NaN): empty, like `IntervalSet`.
         self.enter.t.partial_cmp(&self.exit.t) == Some(core::cmp::Ordering::Less)
+    }
+
+    /// Narrows to a convex solid's pieces: `Some(false)` once empty (no
+    /// piece, or an empty meet), `None` if there are two pieces after all.
+    #[inline(always)]
+    pub(crate) fn with_pieces(&mut self, pieces: &Pieces) -> Option<bool> {
+        match *pieces.as_slice() {
+            [] => Some(false),
+            [iv] => Some(self.with(iv.enter, iv.exit)),
+            _ => None,
+        }
     }
 
     /// The interval, non-empty as long as every [`Meet::with`] said so.

@@ -4,12 +4,13 @@
 //! the larger quadric; reaching them from a BVH leaf took three dependent
 //! cache misses per block (leaf entry, `Block`, solids) and, for a rotated
 //! box, thirteen cache lines of solids. Here the blocks of one leaf are
-//! neighbours: a slot per block in leaf order, and the half-spaces and
-//! quadrics of consecutive slots packed in two arrays in the same order, so a
-//! leaf reads a few consecutive lines of each. Two opposite half-spaces in a
-//! row (a box's faces on one axis, a cylinder's caps) are packed as one
-//! slab ([`Face`]), and consecutive faces around the same reference point
-//! (a box's three slabs) share the ray's re-basing ([`Rebased`]).
+//! neighbours: a slot per block in leaf order, and the half-spaces (as
+//! faces) and quadrics of consecutive slots packed in two arrays in the same
+//! order, so a leaf reads a few consecutive lines of each. Two opposite
+//! half-spaces in a row (a box's faces on one axis, a cylinder's caps) are
+//! packed as one slab ([`Face`]), and consecutive faces around the same
+//! reference point (a box's three slabs) share the ray's re-basing
+//! ([`Rebased`]).
 
 use quadric::{HalfSpace, Precision, Quadric, Ray, Rebased, Solid};
 
@@ -290,11 +291,7 @@ impl Kernel {
         while i < slot.count {
             let met = if slot.quadric_mask & (1 << i) != 0 {
                 q += 1;
-                match *self.quadrics[q - 1].0.pieces_with(ray, i, precision).as_slice() {
-                    [] => false,
-                    [iv] => meet.with(iv.enter, iv.exit),
-                    _ => return None,
-                }
+                meet.with_pieces(&self.quadrics[q - 1].0.pieces_with(ray, i, precision))?
             } else {
                 let Face { half_space: h, opposite } = &self.faces[f];
                 f += 1;
