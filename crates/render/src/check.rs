@@ -47,7 +47,7 @@ pub fn check(world: &World) -> Report {
             let (lo, hi) = bounds.unwrap_or(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]));
             bounds = Some(([0, 1, 2].map(|k| lo[k].min(aabb.min[k])), [0, 1, 2].map(|k| hi[k].max(aabb.max[k]))));
         } else if kernel_bounds {
-            warnings.push(format!("block {} \"{}\" ({}) may be unbounded", i + 1, b.name(), world.blocks[i].path));
+            warnings.push(format!("block {} \"{}\" ({}) may be unbounded", i + 1, b.name(), world.blocks()[i].path));
         }
         if b.is_transparent() {
             let m = world.block_material(id);
@@ -82,11 +82,11 @@ pub fn check(world: &World) -> Report {
     if world.lights.is_empty() {
         warnings.push("the scene has no lights: only ambient light, reflection and refraction".into());
     }
-    let used: Vec<bool> = (0..world.materials.len())
-        .map(|m| world.blocks.iter().any(|b| b.material == m || b.solid_materials.contains(&m)))
+    let used: Vec<bool> = (0..world.materials().len())
+        .map(|m| world.blocks().iter().any(|b| b.material == m || b.solid_materials.contains(&m)))
         .collect();
     // The last material is the built-in default.
-    for (m, mat) in world.materials.iter().enumerate().take(world.materials.len() - 1) {
+    for (m, mat) in world.materials().iter().enumerate().take(world.materials().len() - 1) {
         if !used[m] {
             warnings.push(format!("material \"{}\" is not used", mat.name));
         }
@@ -96,7 +96,7 @@ pub fn check(world: &World) -> Report {
         solids: complex.blocks().iter().map(|b| b.solids().len()).sum(),
         transparent: complex.blocks().iter().filter(|b| b.is_transparent()).count(),
         lights: world.lights.len(),
-        materials: world.materials.len() - 1,
+        materials: world.materials().len() - 1,
         bounds,
         epsilon: complex.epsilon(),
         size: (world.camera.width(), world.camera.height()),

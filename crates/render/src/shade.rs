@@ -73,12 +73,6 @@ pub struct Shader<'w> {
     complex: &'w Complex,
     eps: f64,
     transparent: bool,
-    /// Per block, the material index of all its surfaces, or `u32::MAX`
-    /// when its solids' materials differ (then `World::surface_material`
-    /// answers). Four bytes per block, where a `BlockInfo` is 56 and its
-    /// solid list a heap buffer of its own: one load, likely cached, per
-    /// shaded hit of a large scene.
-    surface_materials: Vec<u32>,
 }
 
 /// `a ⊙ b`, where a zero factor gives zero even against infinity. Colours
@@ -97,25 +91,12 @@ impl<'w> Shader<'w> {
     /// A shader for `world`.
     pub fn new(world: &'w World) -> Self {
         let complex = &world.complex;
-        let uniform = |info: &crate::scene::BlockInfo| {
-            let same = info.solid_materials.iter().all(|&m| m == info.material);
-            u32::try_from(info.material).ok().filter(|&m| same && m != u32::MAX).unwrap_or(u32::MAX)
-        };
-        let surface_materials = world.blocks.iter().map(uniform).collect();
-        Shader { world, complex, eps: complex.epsilon(), transparent: complex.has_transparent(), surface_materials }
+        Shader { world, complex, eps: complex.epsilon(), transparent: complex.has_transparent() }
     }
 
     /// The world it shades.
     pub fn world(&self) -> &'w World {
         self.world
-    }
-
-    /// `World::surface_material`, read from the shader's compact table.
-    fn surface_material(&self, block: BlockId, solid: u32) -> &'w Material {
-        match self.surface_materials.get(block.index()) {
-            Some(&m) if m != u32::MAX => &self.world.materials[m as usize],
-            _ => self.world.surface_material(block, solid),
-        }
     }
 
     /// The colour seen along a primary ray and the surface it hit.
@@ -210,7 +191,7 @@ impl<'w> Shader<'w> {
 
     fn shade(&self, ray: &Ray, e: &Event, depth: u32, weight: f64, scratch: &mut Scratch) -> Rgb {
         let world = self.world;
-        let mat = self.surface_material(e.block, e.solid);
+        let mat = self.world.surface_material(e.block, e.solid);
         let v = -ray.direction();
         let n = facing_normal(&e.normal, &ray.direction());
         let ambient = Vector3::from(world.settings.ambient);
