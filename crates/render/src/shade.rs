@@ -191,7 +191,7 @@ impl<'w> Shader<'w> {
 
     fn shade(&self, ray: &Ray, e: &Event, depth: u32, weight: f64, scratch: &mut Scratch) -> Rgb {
         let world = self.world;
-        let mat = self.world.surface_material(e.block, e.solid);
+        let mat = world.surface_material(e.block, e.solid);
         let v = -ray.direction();
         let n = facing_normal(&e.normal, &ray.direction());
         let ambient = Vector3::from(world.settings.ambient);
