@@ -104,6 +104,18 @@ macro_rules! with_tree {
     };
 }
 
+/// Which inner node the collapse into a wide tree opens next, once the
+/// binary node's own two children are open ([`Tree::collapse`]).
+#[derive(Clone, Copy, Debug)]
+enum Open {
+    /// The shallowest (the first of them): the binary tree level by level,
+    /// best where the blocks are alike (a grid).
+    Shallowest,
+    /// The one with the largest box, which a ray most likely enters: best
+    /// where sizes vary (a sphereflake's spheres shrink threefold a level).
+    Largest,
+}
+
 /// The hierarchy: wide nodes and the block indices the leaves point into.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Bvh {
@@ -285,12 +297,13 @@ impl Bvh {
     /// Builds the hierarchy over `(index, box)` pairs; every box must be
     /// bounded. Eight-wide from [`EIGHT_WIDE_FROM`] pairs on, else four-wide.
     pub(crate) fn build(entries: &[(u32, Aabb)]) -> Self {
-        Self::build_with(entries, PARALLEL_FROM, entries.len() >= EIGHT_WIDE_FROM)
+        Self::build_with(entries, PARALLEL_FROM, entries.len() >= EIGHT_WIDE_FROM, None)
     }
 
     /// [`Bvh::build`], with subtrees of `parallel_from` blocks or more built
-    /// on two threads, eight-wide if `eight`.
-    fn build_with(entries: &[(u32, Aabb)], parallel_from: usize, eight: bool) -> Self {
+    /// on two threads, eight-wide if `eight`, collapsed by `open` (`None`:
+    /// by the cheaper rule, see [`Tree::from_binary`]).
+    fn build_with(entries: &[(u32, Aabb)], parallel_from: usize, eight: bool, open: Option<Open>) -> Self {
         if entries.is_empty() {
             return Bvh::default();
         }
@@ -308,9 +321,9 @@ impl Bvh {
         binary.nodes.push(EMPTY_NODE);
         binary.build_node(0, &mut work, 0, parallel_from);
         let nodes = if eight {
-            Nodes::Eight(Tree::from_binary(&binary.nodes))
+            Nodes::Eight(Tree::from_binary(&binary.nodes, open))
         } else {
-            Nodes::Four(Tree::from_binary(&binary.nodes))
+            Nodes::Four(Tree::from_binary(&binary.nodes, open))
         };
         Bvh { nodes, items: binary.items }
     }
@@ -374,10 +387,11 @@ impl Bvh {
 }
 
 impl<const W: usize, const H: usize> Tree<W, H> {
-    /// The wide tree of a binary one (root: node 0, not empty).
-    fn from_binary(binary: &[Node]) -> Self {
+    /// The wide tree of a binary one (root: node 0, not empty), collapsed
+    /// by `open`, or (`None`) both ways [`Open`] offers, keeping the one of
+    /// lower surface-area cost ([`Open::Shallowest`] on a tie).
+    fn from_binary(binary: &[Node], open: Option<Open>) -> Self {
         const { assert!(W == 4 * H && W <= 8) };
-        let mut tree = Tree { nodes: Vec::with_capacity(binary.len() / (W - 1) + 1) };
         let root = &binary[0];
         if root.count > 0 {
             // A single leaf: one node with one lane.
@@ -385,28 +399,58 @@ impl<const W: usize, const H: usize> Tree<W, H> {
             node.set_box(0, &root.min, &root.max);
             node.child[0] = root.start;
             node.count[0] = root.count;
-            tree.nodes.push(node);
-        } else {
-            tree.collapse(binary, 0);
+            return Tree { nodes: vec![node] };
         }
-        tree
+        if let Some(open) = open {
+            return Self::collapsed(binary, open).0;
+        }
+        let ((shallow, shallow_cost), (large, large_cost)) =
+            rayon::join(|| Self::collapsed(binary, Open::Shallowest), || Self::collapsed(binary, Open::Largest));
+        if large_cost < shallow_cost {
+            large
+        } else {
+            shallow
+        }
+    }
+
+    /// The wide tree of a binary one whose root is an inner node, opened by
+    /// `open`, and its cost: the sum of its nodes' half-areas (see
+    /// [`Tree::collapse`]).
+    fn collapsed(binary: &[Node], open: Open) -> (Self, f64) {
+        let mut tree = Tree { nodes: Vec::with_capacity(binary.len() / (W - 1) + 1) };
+        let mut cost = 0.0;
+        tree.collapse(binary, 0, open, &mut cost);
+        (tree, cost)
     }
 
     /// Appends the wide node for the binary inner node `n`, then those of
-    /// its inner descendants; returns its index. Its children are `n`'s
-    /// descendants found by opening the shallowest inner child until there
-    /// are `W`, or only leaves: so every inner child is at least two binary
-    /// levels below `n` (both children of `n` are opened before any deeper
-    /// node, if inner), and the wide tree is at most `MAX_DEPTH / 2` deep
-    /// (see `STACK`).
-    fn collapse(&mut self, nodes: &[Node], n: usize) -> u32 {
+    /// its inner descendants; returns its index, and adds to `cost` the
+    /// half-areas of the boxes of the nodes it makes (a ray crosses a box
+    /// about in proportion to its area: their sum over the root's is the
+    /// number of node steps a random ray takes, the surface-area heuristic
+    /// of the wide tree). Its children are `n`'s descendants found by
+    /// opening inner children as `open` picks until there are `W`, or only
+    /// leaves; `n`'s own two children first, whichever the rule: so every
+    /// inner child is at least two binary levels below `n`, and the wide
+    /// tree is at most `MAX_DEPTH / 2` deep (see `STACK`).
+    fn collapse(&mut self, nodes: &[Node], n: usize, open: Open, cost: &mut f64) -> u32 {
+        *cost += half_area(&nodes[n].min, &nodes[n].max);
         let first = nodes[n].start as usize;
         // `(node, binary depth below n)`.
         let mut children = vec![(first, 1), (first + 1, 1)];
         while children.len() < W {
-            let shallowest =
-                (0..children.len()).filter(|&j| nodes[children[j].0].count == 0).min_by_key(|&j| children[j].1);
-            let Some(j) = shallowest else { break };
+            let inner = (0..children.len()).filter(|&j| nodes[children[j].0].count == 0);
+            let pick = match open {
+                Open::Shallowest => inner.min_by_key(|&j| children[j].1),
+                Open::Largest => inner
+                    .map(|j| {
+                        let k = &nodes[children[j].0];
+                        (j, children[j].1 == 1, half_area(&k.min, &k.max))
+                    })
+                    .reduce(|a, b| if (b.1, b.2) > (a.1, a.2) { b } else { a })
+                    .map(|(j, _, _)| j),
+            };
+            let Some(j) = pick else { break };
             let (c, d) = children.remove(j);
             let c = nodes[c].start as usize;
             children.extend([(c, d + 1), (c + 1, d + 1)]);
@@ -421,7 +465,7 @@ impl<const W: usize, const H: usize> Tree<W, H> {
                 node.child[lane] = k.start;
                 node.count[lane] = k.count;
             } else {
-                node.child[lane] = self.collapse(nodes, c);
+                node.child[lane] = self.collapse(nodes, c, open, cost);
             }
         }
         self.nodes[me] = node;
@@ -919,19 +963,20 @@ mod tests {
             }
         }
 
-        /// The collapsed tree, four- and eight-wide, visits exactly the
+        /// The collapsed tree, four- and eight-wide, by either rule, visits exactly the
         /// blocks whose own boxes the ray enters (no early exit), and
         /// `visit_point` exactly those whose boxes hold the point.
         #[test]
         fn tree_visits_what_brute_force_does(
             boxes in prop::collection::vec(boxed(), 1..60), ray in ray(), p in [coord(), coord(), coord()], eight: bool,
+            open in prop_oneof![Just(None), Just(Some(Open::Shallowest)), Just(Some(Open::Largest))],
         ) {
             let entries: Vec<(u32, Aabb)> = boxes
                 .iter()
                 .enumerate()
                 .map(|(i, (lo, hi))| (i as u32, Aabb { min: Point3::from(*lo), max: Point3::from(*hi) }))
                 .collect();
-            let bvh = Bvh::build_with(&entries, PARALLEL_FROM, eight);
+            let bvh = Bvh::build_with(&entries, PARALLEL_FROM, eight, open);
             prop_assert_eq!(matches!(bvh.nodes, Nodes::Eight(_)), eight);
             let rb = RayBoxes::new(&ray);
             let mut seen = Vec::new();
@@ -977,7 +1022,8 @@ mod tests {
             })
             .collect();
         for eight in [false, true] {
-            let (one, two) = (Bvh::build_with(&entries, usize::MAX, eight), Bvh::build_with(&entries, 64, eight));
+            let (one, two) =
+                (Bvh::build_with(&entries, usize::MAX, eight, None), Bvh::build_with(&entries, 64, eight, None));
             assert_eq!(one.items, two.items);
             match (&one.nodes, &two.nodes) {
                 (Nodes::Four(a), Nodes::Four(b)) => same_tree(a, b),
@@ -988,6 +1034,78 @@ mod tests {
         // The size decides the width.
         assert!(matches!(Bvh::build(&entries).nodes, Nodes::Eight(_)));
         assert!(matches!(Bvh::build(&entries[..EIGHT_WIDE_FROM - 1]).nodes, Nodes::Four(_)));
+    }
+
+    /// The build keeps the collapse of lower cost: level by level for a
+    /// grid of like boxes, the largest boxes first for a sphereflake's
+    /// spheres, whose sizes shrink threefold a level (where the two rules
+    /// give different trees, so the choice is seen).
+    #[test]
+    fn the_build_keeps_the_cheaper_collapse() {
+        let cube = |c: [f64; 3], r: f64| Aabb {
+            min: Point3::new(c[0] - r, c[1] - r, c[2] - r),
+            max: Point3::new(c[0] + r, c[1] + r, c[2] + r),
+        };
+        let grid: Vec<(u32, Aabb)> = (0..1000u32)
+            .map(|i| (i, cube([f64::from(i % 10), f64::from(i / 10 % 10), f64::from(i / 100)], 0.3)))
+            .collect();
+        // Spheres of radius 1, 1/3, 1/9, 1/27 around their parents.
+        let mut flake = vec![cube([0.0; 3], 1.0)];
+        let mut level = vec![([0.0; 3], 1.0)];
+        for _ in 0..3 {
+            let mut next = vec![];
+            for (c, r) in level {
+                for k in 0..9 {
+                    let a = f64::from(k) * 0.7;
+                    let child = (
+                        [c[0] + 1.34 * r * a.cos(), c[1] + 1.34 * r * a.sin(), c[2] + 0.2 * r * f64::from(k % 3)],
+                        r / 3.0,
+                    );
+                    flake.push(cube(child.0, child.1));
+                    next.push(child);
+                }
+            }
+            level = next;
+        }
+        let flake: Vec<(u32, Aabb)> = flake.into_iter().enumerate().map(|(i, b)| (i as u32, b)).collect();
+        for (entries, cheaper) in [(&grid, Open::Shallowest), (&flake, Open::Largest)] {
+            let trees = [None, Some(Open::Shallowest), Some(Open::Largest)]
+                .map(|open| Bvh::build_with(entries, PARALLEL_FROM, true, open));
+            let [Nodes::Eight(chosen), Nodes::Eight(shallow), Nodes::Eight(large)] = trees.map(|b| b.nodes) else {
+                panic!("not eight-wide");
+            };
+            assert_ne!(tree_cost(&shallow), tree_cost(&large), "the rules give the same tree");
+            let (best, other) = match cheaper {
+                Open::Shallowest => (shallow, large),
+                Open::Largest => (large, shallow),
+            };
+            assert!(tree_cost(&best) < tree_cost(&other), "{cheaper:?} is not the cheaper rule here");
+            same_tree(&chosen, &best);
+        }
+    }
+
+    /// The sum of the half-areas of a tree's node boxes (the union of each
+    /// node's lanes), as [`Tree::collapse`] adds them up.
+    fn tree_cost<const W: usize, const H: usize>(t: &Tree<W, H>) -> f64 {
+        t.nodes
+            .iter()
+            .map(|node| {
+                let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+                for lane in 0..W {
+                    for i in 0..3 {
+                        let (a, b) = (
+                            node.min[i][lane / 4].as_array_ref()[lane % 4],
+                            node.max[i][lane / 4].as_array_ref()[lane % 4],
+                        );
+                        if a <= b {
+                            lo[i] = lo[i].min(a);
+                            hi[i] = hi[i].max(b);
+                        }
+                    }
+                }
+                half_area(&lo, &hi)
+            })
+            .sum()
     }
 
     fn same_tree<const W: usize, const H: usize>(a: &Tree<W, H>, b: &Tree<W, H>) {
