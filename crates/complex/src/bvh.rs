@@ -1,7 +1,8 @@
 //! A bounding-volume hierarchy over the bounded blocks.
 //!
 //! Built once with the surface-area heuristic over binned centroids into a
-//! binary tree, then collapsed into a tree of four-wide nodes: a node holds
+//! binary tree, then collapsed into a tree of four-wide nodes (two ways,
+//! the tree of lower surface-area cost kept: see [`Open`]): a node holds
 //! the boxes of its (up to) four children lane by lane, so one step tests all
 //! four with a few `f64x4` operations (the `wide` crate: AVX where the
 //! target has it, plain arrays elsewhere) and reads 256 bytes from four
