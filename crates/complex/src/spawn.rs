@@ -202,17 +202,29 @@ impl Spawner<'_> {
     /// The ray from the hit point along `direction` (as
     /// [`Complex::spawn_ray`]).
     pub fn ray(&mut self, direction: &Vector3<f64>) -> Result<Ray, GeometryError> {
-        let Some(solid) = self.solid else { return Ray::new(self.point, *direction) };
+        Ray::new(self.origin(direction), *direction)
+    }
+
+    /// [`Spawner::ray`] along a direction already normalised (a light
+    /// direction): the same origin, and the direction kept as it is when it
+    /// is a unit vector to within [`Ray::UNIT_TOLERANCE`] ([`Ray::new_unit`]).
+    pub fn unit_ray(&mut self, direction: &Vector3<f64>) -> Result<Ray, GeometryError> {
+        Ray::new_unit(self.origin(direction), *direction)
+    }
+
+    /// The origin of a ray leaving along `direction`.
+    #[inline(never)]
+    fn origin(&mut self, direction: &Vector3<f64>) -> Point3<f64> {
         let point = self.point;
+        let Some(solid) = self.solid else { return point };
         let normal = self.normal;
         let prepared = *self.prepared.get_or_insert_with(|| Prepared::at(solid, &point, normal.as_ref()));
-        let origin = match prepared.and_then(|p| p.side(direction).map(|sigma| (p, sigma))) {
+        match prepared.and_then(|p| p.side(direction).map(|sigma| (p, sigma))) {
             None => point,
             Some((p, sigma)) => {
                 *self.origins[usize::from(sigma > 0.0)].get_or_insert_with(|| p.offset(solid, &point, sigma))
             }
-        };
-        Ray::new(origin, *direction)
+        }
     }
 }
 

@@ -344,6 +344,33 @@ fn a_spawner_given_the_hit_normal_spawns_the_same_rays() {
 }
 
 #[test]
+fn unit_rays_leave_from_the_same_origins_and_pass_the_same_oracle() {
+    // `Spawner::unit_ray` (the shadow rays' constructor) along a normalised
+    // direction: `spawn_ray`'s origin, the direction kept bit for bit, and
+    // no self-intersection, at every distance from the world origin.
+    let mut total = Tally::default();
+    for (i, at) in DISTANCES.into_iter().enumerate() {
+        for scene in scenes(at) {
+            let t = run(&scene, 12, 0x5ec0_2000 + i as u64, |c, hit, dir| {
+                let unit = dir / dir.norm();
+                let got = c.spawner_with_normal(hit.surface(), &hit.point, &hit.normal).unit_ray(&unit).ok()?;
+                let want = hit.spawn_ray(c, &unit).ok()?;
+                assert_eq!(got.origin(), want.origin(), "{}: direction {unit:?}", scene.name);
+                assert_eq!(got.direction(), unit, "{}", scene.name);
+                Some(got)
+            });
+            total.rays += t.rays;
+            total.wrong_side += t.wrong_side;
+            total.self_hits += t.self_hits;
+            total.misses += t.misses;
+            total.examples.extend(t.examples);
+        }
+    }
+    assert!(total.rays > 1500, "too few rays judged: {}", total.rays);
+    assert_eq!(total.failures(), 0, "{total:#?}");
+}
+
+#[test]
 fn rays_from_the_raw_hit_point_fail_the_same_oracle() {
     // The control: the same harness must catch the acne `spawn_ray` removes.
     let mut failures = 0;

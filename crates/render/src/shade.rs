@@ -290,7 +290,7 @@ impl<'w> Shader<'w> {
         if !self.world.settings.shadows {
             return one;
         }
-        let Ok(ray) = spawner.ray(l) else { return one };
+        let Ok(ray) = spawner.unit_ray(l) else { return one };
         scratch.rays += 1;
         if !self.transparent {
             // Any blocker will do: an any-hit query, no nearest-hit ordering.
