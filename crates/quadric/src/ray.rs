@@ -142,10 +142,10 @@ mod tests {
         ) {
             let (o, v) = (Point3::from(o), Vector3::new(x, y, z));
             prop_assume!(v.amax() > 0.0);
-            let plain = Ray::new(o, v).unwrap();
+            let plain = Ray::new(o, v).expect("a finite, nonzero direction");
             let unit = plain.direction();
-            prop_assert_eq!(Ray::new_unit(o, unit).unwrap().direction(), unit);
-            let scaled = Ray::new_unit(o, v).unwrap();
+            prop_assert_eq!(Ray::new_unit(o, unit).expect("a unit direction").direction(), unit);
+            let scaled = Ray::new_unit(o, v).expect("a finite, nonzero direction");
             if (v.norm_squared() - 1.0).abs() > Ray::UNIT_TOLERANCE {
                 prop_assert_eq!(scaled, plain);
             }
