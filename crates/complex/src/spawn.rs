@@ -206,7 +206,8 @@ impl Spawner<'_> {
     }
 
     /// [`Spawner::ray`] along a direction already normalised (a light
-    /// direction): the same origin, and the direction kept as it is when it
+    /// direction `v / |v|`, a mirror or refracted direction built from unit
+    /// vectors): the same origin, and the direction kept as it is when it
     /// is a unit vector to within [`Ray::UNIT_TOLERANCE`] ([`Ray::new_unit`]).
     pub fn unit_ray(&mut self, direction: &Vector3<f64>) -> Result<Ray, GeometryError> {
         Ray::new_unit(self.origin(direction), *direction)

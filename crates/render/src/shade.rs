@@ -257,7 +257,7 @@ impl<'w> Shader<'w> {
                 } else {
                     let dir = -eta * v + (eta * cos_i - (1.0 - sin2_t).sqrt()) * n;
                     let w = weight * mat.transmit.max();
-                    if let (true, Ok(r)) = (w >= MIN_PATH_WEIGHT, spawner.ray(&dir)) {
+                    if let (true, Ok(r)) = (w >= MIN_PATH_WEIGHT, spawner.unit_ray(&dir)) {
                         c += weigh(&mat.transmit, &self.trace_weighted(&r, depth + 1, w, scratch));
                     }
                 }
@@ -266,7 +266,7 @@ impl<'w> Shader<'w> {
         let w = weight * kr.max();
         if !is_zero(&kr) && w >= MIN_PATH_WEIGHT {
             let dir = 2.0 * cos_i * n - v;
-            if let Ok(r) = spawner.ray(&dir) {
+            if let Ok(r) = spawner.unit_ray(&dir) {
                 c += weigh(&kr, &self.trace_weighted(&r, depth + 1, w, scratch));
             }
         }
