@@ -37,12 +37,12 @@ lint:
 # with debug assertions, from the committed seeds (regenerated first) and
 # the kept crash inputs of fuzz/regressions/<target>/ (replayed first). A
 # crash stops the recipe and leaves its input in fuzz/artifacts/<target>/.
-# RUSTFLAGS replaces .cargo/config.toml's flags, so FMA is asked for again.
+# RUSTFLAGS replaces .cargo/config.toml's flags, so FMA and POPCNT are asked for again.
 fuzz-kernel seconds="30":
     cargo run --quiet --manifest-path fuzz/Cargo.toml --example seeds
     for t in quadric_intervals complex_queries; do \
         mkdir -p fuzz/corpus/$t && \
-        RUSTFLAGS="{{ if arch() == "x86_64" { "-Ctarget-feature=+fma" } else { "" } }}" \
+        RUSTFLAGS="{{ if arch() == "x86_64" { "-Ctarget-feature=+fma,+popcnt" } else { "" } }}" \
         cargo fuzz run --sanitizer none --debug-assertions $t fuzz/corpus/$t fuzz/seeds/$t \
             $(test -d fuzz/regressions/$t && echo fuzz/regressions/$t) -- \
             -max_total_time={{ seconds }} -print_final_stats=1 || exit 1; \
@@ -55,7 +55,7 @@ fuzz-kernel seconds="30":
 fuzz-scene seconds="60":
     cp scenes/*.json fuzz/seeds/scene/
     mkdir -p fuzz/corpus/scene
-    RUSTFLAGS="{{ if arch() == "x86_64" { "-Ctarget-feature=+fma" } else { "" } }}" \
+    RUSTFLAGS="{{ if arch() == "x86_64" { "-Ctarget-feature=+fma,+popcnt" } else { "" } }}" \
     cargo fuzz run --sanitizer none --debug-assertions scene fuzz/corpus/scene fuzz/seeds/scene -- \
         -dict=fuzz/scene.dict -max_total_time={{ seconds }} -print_final_stats=1
 

@@ -49,9 +49,9 @@ data="$target/pgo-profile"
 rm -rf "$data"
 mkdir -p "$data"
 data=$(cd "$data" && pwd)
-# RUSTFLAGS replaces the flags of .cargo/config.toml, so FMA is asked for again.
+# RUSTFLAGS replaces the flags of .cargo/config.toml, so they are asked for again.
 base=""
-if [ "$(uname -m)" = x86_64 ]; then base="-C target-feature=+fma"; fi
+if [ "$(uname -m)" = x86_64 ]; then base="-C target-feature=+fma,+popcnt"; fi
 
 echo "== instrumented build ($target/pgo-gen)"
 RUSTFLAGS="$base -C profile-generate=$data" CARGO_TARGET_DIR="$target/pgo-gen" \
