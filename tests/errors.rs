@@ -148,7 +148,10 @@ fn wrong_types_and_missing_keys_name_the_path() {
     check(
         &*blocks(r#"{ "objects": [ { "cone": {}, "transform": [ { "scale": [1, 2] } ] } ] }"#),
         1,
-        &["transform[0].scale", "a number or an array [sx, sy, sz]"],
+        &[
+            "blocks[0].objects[0].transform[0].scale, line 1, column 157",
+            "invalid length 2, expected a number or an array [sx, sy, sz]",
+        ],
     );
     check(&*format!(r#"{{ {CAMERA} }}"#), 1, &["missing field `blocks`"]);
     check(r#"{ "camera": { "eye": [0, 0, 5] }, "blocks": [] }"#, 1, &["camera, line 1", "missing field `direction`"]);

@@ -88,10 +88,7 @@ impl SceneError {
         } else {
             message
         };
-        let message = with_suggestion(message).replace(
-            "data did not match any variant of untagged enum Scale",
-            "`scale` takes a number or an array [sx, sy, sz]",
-        );
+        let message = with_suggestion(message);
         SceneError::Parse { path, line, column, message }
     }
 }
