@@ -271,8 +271,12 @@ impl<'de> Deserialize<'de> for Scale {
                 for (i, x) in v.iter_mut().enumerate() {
                     *x = seq.next_element()?.ok_or_else(|| serde::de::Error::invalid_length(i, &self))?;
                 }
-                if seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
-                    return Err(serde::de::Error::invalid_length(4, &self));
+                let mut more = 0;
+                while seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                    more += 1;
+                }
+                if more > 0 {
+                    return Err(serde::de::Error::invalid_length(3 + more, &self));
                 }
                 Ok(Scale::PerAxis(v))
             }
@@ -1016,6 +1020,7 @@ mod tests {
             ("[]", "invalid length 0, expected a number or an array [sx, sy, sz]"),
             ("[1, 2]", "invalid length 2, expected a number or an array [sx, sy, sz]"),
             ("[1, 2, 3, 4]", "invalid length 4, expected a number or an array [sx, sy, sz]"),
+            ("[1, 2, 3, 4, [5], {}]", "invalid length 6, expected a number or an array [sx, sy, sz]"),
             ("\"x\"", "invalid type: string \"x\", expected a number or an array [sx, sy, sz]"),
             ("{}", "invalid type: map, expected a number or an array [sx, sy, sz]"),
             ("[1, true, 3]", "invalid type: boolean `true`, expected f64"),
