@@ -185,8 +185,10 @@ impl Prepared {
 /// Spawns every secondary ray of one hit point: the point's own work (the
 /// error-bounded `f` and the normal) is done once, and each side's origin
 /// the first time a ray leaves on that side — a hit with three lights and a
-/// reflection computes one origin, not four. Each ray is exactly
-/// [`Complex::spawn_ray`]'s. From [`Complex::spawner`].
+/// reflection computes one origin, not four. Each ray leaves from
+/// [`Complex::spawn_ray`]'s origin; [`Spawner::ray`] is exactly that ray,
+/// [`Spawner::unit_ray`] keeps an already normalised direction as it is.
+/// From [`Complex::spawner`].
 #[derive(Debug)]
 pub struct Spawner<'c> {
     solid: Option<SolidRef<'c>>,
@@ -231,7 +233,7 @@ impl Spawner<'_> {
 
 impl Complex {
     /// A [`Spawner`] for the hit `point` on `surface`: many secondary rays
-    /// from one point, each equal to [`Complex::spawn_ray`]'s.
+    /// from one point, each from [`Complex::spawn_ray`]'s origin.
     pub fn spawner(&self, surface: Surface, point: &Point3<f64>) -> Spawner<'_> {
         let solid = self.solid_ref(surface.block, surface.solid);
         let finite = point.iter().all(|c| c.is_finite());

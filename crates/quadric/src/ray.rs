@@ -49,7 +49,7 @@ impl Ray {
     /// A ray along a direction the caller has already normalised (a light
     /// direction `v / |v|`): kept as it is where `|direction|²` is 1 to
     /// within [`Ray::UNIT_TOLERANCE`], which saves [`Ray::new`]'s two divisions
-    /// and square root (a long chain ahead of every shadow ray); any other
+    /// and square root (a long chain ahead of every secondary ray); any other
     /// direction is normalised as `new` does. Either way the direction is
     /// a unit vector to within a few ulps, as `new`'s is.
     ///
