@@ -178,6 +178,14 @@ impl Camera {
         Ray::new(self.eye, self.offset(i, j)).unwrap_or(self.centre)
     }
 
+    /// [`Camera::ray_at`] of four pixel positions `(i, j)`, exactly: the
+    /// four directions normalised together ([`Ray::new4`]).
+    #[inline]
+    pub fn rays4(&self, at: [(f64, f64); 4]) -> [Ray; 4] {
+        let rays = Ray::new4(self.eye, &at.map(|(i, j)| self.offset(i, j)));
+        rays.map(|r| r.unwrap_or(self.centre))
+    }
+
     /// Where the point `x` appears: fractional `(i, j)` of the pixel grid
     /// (centres at integers), or `None` if it is not in front of the eye.
     pub fn project(&self, x: &Point3<f64>) -> Option<(f64, f64)> {
@@ -230,6 +238,16 @@ mod tests {
             assert_eq!(got.origin(), e);
             let err = (got.direction() - want).amax();
             assert!(err <= 4.0 * f64::EPSILON, "pixel ({i},{j}): {got:?} vs {want:?}, error {err:e}");
+        }
+        // Four at a time: the same rays, bit for bit, whole and sub-pixel positions.
+        let (fw, fh) = (f64::from(w), f64::from(h));
+        for at in [
+            [(0.0, 0.0), (0.0, fw - 1.0), (fh - 1.0, 0.0), (fh - 1.0, fw - 1.0)],
+            [(0.25, 0.75), (fh / 3.0, fw / 7.0), (-0.5, fw - 0.5), (fh / 2.0 - 0.125, 0.375)],
+        ] {
+            let bits = |r: Ray| (r.origin().map(f64::to_bits), r.direction().map(f64::to_bits));
+            let four = cam.rays4(at).map(bits);
+            assert_eq!(four, at.map(|(i, j)| bits(cam.ray_at(i, j))), "{at:?}");
         }
     }
 

@@ -360,10 +360,10 @@ fn render_rows(shader: &Shader, i0: u32, out: &mut [Pixel]) -> u64 {
     let mut j = 0;
     while j + tile_w <= width {
         let at = |k: usize| (i0 + (k / tile_w) as u32, (j + k % tile_w) as u32);
-        let rays = [0, 1, 2, 3].map(|k| {
+        let rays = cam.rays4([0, 1, 2, 3].map(|k| {
             let (i, j) = at(k);
-            cam.ray(i, j)
-        });
+            (f64::from(i), f64::from(j))
+        }));
         for (k, (c, hit)) in shader.primary4(&rays, &mut scratch).into_iter().enumerate() {
             let (i, j) = at(k);
             out[(i - i0) as usize * width + j as usize] = pixel_of(c, if hit.is_some() { 1.0 } else { 0.0 }, hit);
@@ -390,21 +390,22 @@ fn supersampled(shader: &Shader, scratch: &mut Scratch, cam: &crate::camera::Cam
         let (a, b) = (k / n, k % n);
         let di = (f64::from(a) + 0.5) / f64::from(n) - 0.5;
         let dj = (f64::from(b) + 0.5) / f64::from(n) - 0.5;
-        cam.ray_at(f64::from(i) + di, f64::from(j) + dj)
+        (f64::from(i) + di, f64::from(j) + dj)
     };
     let mut c = Vector3::zeros();
     let mut covered = 0u32;
     let count = n * n;
     let mut k = 0;
     while k + 4 <= count {
-        for (cs, h) in shader.primary4(&[sub(k), sub(k + 1), sub(k + 2), sub(k + 3)], scratch) {
+        for (cs, h) in shader.primary4(&cam.rays4([sub(k), sub(k + 1), sub(k + 2), sub(k + 3)]), scratch) {
             c += cs;
             covered += u32::from(h.is_some());
         }
         k += 4;
     }
     for k in k..count {
-        let (cs, h) = shader.primary(&sub(k), scratch);
+        let (i, j) = sub(k);
+        let (cs, h) = shader.primary(&cam.ray_at(i, j), scratch);
         c += cs;
         covered += u32::from(h.is_some());
     }
