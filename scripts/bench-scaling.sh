@@ -34,7 +34,7 @@ while [ $# -gt 0 ]; do
         --small) small="$2"; shift 2 ;;
         --large) large="$2"; shift 2 ;;
         --instructions) instructions=1; shift ;;
-        -h|--help) sed -n '2,23p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
         *) echo "bench-scaling: unknown argument '$1' (see --help)" >&2; exit 2 ;;
     esac
 done

@@ -7,7 +7,7 @@
 # it is the ratio of primary rays per second). Parse and load times are
 # excluded on both sides.
 #
-# Usage: scripts/bench-vs-povray.sh [--width W] [--height H] [--threads N] [--runs R] [SCENE...]
+# Usage: scripts/bench-vs-povray.sh [--width W] [--height H] [--threads N] [--runs R] [--precision MODE] [SCENE...]
 # Each renderer renders each scene R times (default 3), alternating, and the
 # fastest time of each is kept: single runs of a fraction of a second swing
 # by tens of percent on a shared machine.
@@ -16,11 +16,13 @@
 # glass scene, sphereflake levels 3 and 4 and the 1,000-block grid. POV-Ray
 # takes minutes on larger grids (it tests every rotated box with every ray):
 # run those at a smaller size, e.g. `--width 160 --height 120 grid-10000`.
+# --precision: komplex's kernel mode (default `accurate`; `fast` evaluates in
+# world space as POV-Ray does, see docs/accuracy.md for what it costs).
 # KOMPLEX=path/to/komplex: measure that binary (no build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-width=640 height=480 threads=1 runs=3
+width=640 height=480 threads=1 runs=3 precision=accurate
 scenes=()
 while [ $# -gt 0 ]; do
     case "$1" in
@@ -28,6 +30,7 @@ while [ $# -gt 0 ]; do
         --height) height="$2"; shift 2 ;;
         --threads) threads="$2"; shift 2 ;;
         --runs) runs="$2"; shift 2 ;;
+        --precision) precision="$2"; shift 2 ;;
         -h|--help) sed -n '2,21p' "$0"; exit 0 ;;
         *) scenes+=("$1"); shift ;;
     esac
@@ -64,12 +67,12 @@ for scene in "${scenes[@]}"; do
             2> "$work/$name.log" >/dev/null || { cat "$work/$name.log" >&2; exit 1; }
         p=$(sed -n 's/.*Trace Time:.*(\([0-9.]*\) seconds).*/\1/p' "$work/$name.log")
         # The data line of `komplex bench`: blocks in column 2, render seconds in 5, all rays/s in 9.
-        read -r blocks o a < <("$komplex" bench "$scene" --width "$width" --height "$height" --threads "$threads" |
-            awk 'NR == 2 { print $2, $5, $9 }')
+        read -r blocks o a < <("$komplex" bench "$scene" --width "$width" --height "$height" --threads "$threads" \
+            --precision "$precision" | awk 'NR == 2 { print $2, $5, $9 }')
         if [ -z "$pov" ] || awk -v x="$p" -v y="$pov" 'BEGIN { exit !(x < y) }'; then pov=$p; fi
         if [ -z "$ours" ] || awk -v x="$o" -v y="$ours" 'BEGIN { exit !(x < y) }'; then ours=$o all=$a; fi
     done
     awk -v n="$name" -v b="$blocks" -v p="$pov" -v o="$ours" -v a="$all" -v px=$((width * height)) 'BEGIN { if (p <= 0) p = 0.001
         printf "%-16s %8d %10.3f %10.3f %14.0f %14.0f %14.0f %8.2f\n", n, b, p, o, px / p, px / o, a, p / o }'
 done
-echo "($width x $height, $threads thread(s), fastest of $runs runs each; ratio = POV-Ray trace time / komplex render time, > 1: komplex is faster)"
+echo "($width x $height, $threads thread(s), komplex --precision $precision, fastest of $runs runs each; ratio = POV-Ray trace time / komplex render time, > 1: komplex is faster)"

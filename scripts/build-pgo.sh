@@ -24,7 +24,7 @@ verify=0
 case "${1:-}" in
     "") ;;
     --verify) verify=1 ;;
-    -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
     *) echo "build-pgo: unknown argument '$1' (see --help)" >&2; exit 2 ;;
 esac
 
