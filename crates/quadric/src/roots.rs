@@ -41,7 +41,52 @@ pub fn two_product(a: f64, b: f64) -> (f64, f64) {
 /// rounding and the doubles are summed as a nonoverlapping expansion
 /// (Shewchuk's Grow-Expansion), whose largest nonzero component carries the
 /// sign. Exact while no product overflows or underflows. At most 6 terms.
+///
+/// The rounded sum answers first where its error bound shows its sign
+/// (and the expansion would be exact): the same sign, without the
+/// expansion's few hundred operations.
 pub fn exact_sign_of_sum(terms: &[(f64, f64, f64, f64)]) -> i32 {
+    filtered_sign_of_sum(terms).unwrap_or_else(|| expansion_sign_of_sum(terms))
+}
+
+/// The sign of `Σ fl(sign·x)·y·z` (the sum [`exact_sign_of_sum`]'s
+/// expansion forms) from the rounded sum `S`, where certain: every factor
+/// zero or of magnitude in `[2⁻³⁰⁰, 2³⁰⁰]`, so that no product or error
+/// term overflows or underflows (the expansion is then exact, and the
+/// nonzero triple products are normal numbers, each rounded twice), and
+/// `|S|` above `8ε·Σ|products|`, twice the bound `7u·Σ|exact products|`
+/// of two roundings per product and five of the sum. `None` otherwise.
+#[inline]
+fn filtered_sign_of_sum(terms: &[(f64, f64, f64, f64)]) -> Option<i32> {
+    const LOW: f64 = 4.909093465297727e-91; // 2⁻³⁰⁰
+    const HIGH: f64 = 2.037035976334486e90; // 2³⁰⁰
+    let safe = |v: f64| v == 0.0 || (LOW..=HIGH).contains(&v.abs());
+    let (mut sum, mut magnitude) = (0.0f64, 0.0f64);
+    for &(sign, x, y, z) in terms.iter().take(6) {
+        let a = sign * x;
+        if !(safe(a) && safe(y) && safe(z)) {
+            return None;
+        }
+        let p = a * y * z;
+        sum += p;
+        magnitude += p.abs();
+    }
+    if magnitude == 0.0 {
+        // Every product is exactly zero (a nonzero one is at least 2⁻⁹⁰⁰).
+        return Some(0);
+    }
+    let bound = 8.0 * f64::EPSILON * magnitude;
+    if sum > bound {
+        Some(1)
+    } else if sum < -bound {
+        Some(-1)
+    } else {
+        None
+    }
+}
+
+/// [`exact_sign_of_sum`] by the expansion alone.
+fn expansion_sign_of_sum(terms: &[(f64, f64, f64, f64)]) -> i32 {
     let mut e = [0.0f64; 24];
     let mut len = 0;
     for &(sign, x, y, z) in terms.iter().take(6) {
@@ -113,4 +158,60 @@ pub fn is_negative(x: f64) -> bool {
 #[inline(always)]
 pub fn is_positive(x: f64) -> bool {
     x > 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use proptest::prelude::*;
+
+    use super::*;
+
+    /// Factors from every range the filter treats differently: zeros, the
+    /// safe range, beyond it both ways, and non-finite values.
+    fn factor() -> impl Strategy<Value = f64> {
+        prop_oneof![
+            4 => (-8i32..8).prop_map(|k| f64::from(k) * 0.25),
+            4 => -4.0..4.0f64,
+            1 => prop::num::f64::ANY,
+            1 => (-1100i32..1100, 1.0..2.0f64).prop_map(|(e, m)| m * 2f64.powi(e)),
+            1 => Just(-0.0),
+        ]
+    }
+
+    fn terms() -> impl Strategy<Value = Vec<(f64, f64, f64, f64)>> {
+        let sign = prop_oneof![Just(1.0), Just(-1.0), Just(2.0), factor()];
+        prop::collection::vec((sign, factor(), factor(), factor()), 0..8)
+    }
+
+    proptest! {
+        /// The filter answers only what the expansion answers.
+        #[test]
+        fn the_filter_keeps_the_expansions_sign(terms in terms()) {
+            if let Some(sign) = filtered_sign_of_sum(&terms) {
+                prop_assert_eq!(sign, expansion_sign_of_sum(&terms));
+            }
+        }
+
+        /// Sums that cancel to a few ulps or to zero, where the filter must
+        /// defer to the expansion.
+        #[test]
+        fn cancelling_sums_reach_the_expansion(x in factor(), y in factor(), z in factor(), w in factor()) {
+            let terms = [(1.0, x, y, z), (-1.0, x, y, z), (1.0, w, f64::EPSILON, 1.0), (1.0, x * y, z, 1.0)];
+            prop_assert_eq!(exact_sign_of_sum(&terms), expansion_sign_of_sum(&terms));
+            let terms = [(1.0, x, y, z), (-1.0, z, y, x)];
+            prop_assert_eq!(exact_sign_of_sum(&terms), expansion_sign_of_sum(&terms));
+        }
+    }
+
+    #[test]
+    fn semi_definite_minors() {
+        // A diagonal matrix's minors (the quadrics of spheres and tubes).
+        assert_eq!(exact_sign_of_sum(&[(1.0, 1.0, 1.0, 1.0), (-1.0, 0.0, 0.0, 1.0)]), 1);
+        assert_eq!(exact_sign_of_sum(&[(1.0, 1.0, 0.0, 1.0), (-1.0, 0.0, 0.0, 1.0)]), 0);
+        // (1 + 2⁻⁵²)² - (1 + 2⁻⁵¹) = 2⁻¹⁰⁴, whose rounded sum is zero.
+        let (u, w) = (1.0 + f64::EPSILON, 1.0 + 2.0 * f64::EPSILON);
+        assert_eq!(filtered_sign_of_sum(&[(1.0, u, u, 1.0), (-1.0, w, 1.0, 1.0)]), None);
+        assert_eq!(exact_sign_of_sum(&[(1.0, u, u, 1.0), (-1.0, w, 1.0, 1.0)]), 1);
+        assert_eq!(exact_sign_of_sum(&[(-1.0, u, u, 1.0), (1.0, w, 1.0, 1.0)]), -1);
+    }
 }
