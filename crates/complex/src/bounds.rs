@@ -581,7 +581,12 @@ fn axial_range(
     if a * a <= beta * (1.0 + 1e-6) + 1e-12 {
         return Some((f64::NEG_INFINITY, f64::INFINITY));
     }
-    let phi = |s: f64| a * s - (alpha + beta * s * s).max(0.0).sqrt() + c;
+    // A cylinder's cross-section does not widen (`β = 0`): its support is
+    // the same square root at every `s` (`0·s² = 0`), taken once, off the
+    // bisection's chain of dependent steps. Only the sign of a zero can
+    // differ, which none of the comparisons below reads.
+    let flat = alpha.max(0.0).sqrt();
+    let phi = |s: f64| a * s - if beta == 0.0 { flat } else { (alpha + beta * s * s).max(0.0).sqrt() } + c;
     // phi is increasing for a > 0 (feasible: s <= root), decreasing for a < 0.
     let sign = a.signum();
     let (mut lo, mut hi) = (-1.0f64, 1.0f64);
@@ -815,6 +820,101 @@ fn narrow_quadric(bx: &mut Aabb, q: &quadric::Quadric) {
         if bx.min[i] > bx.max[i] {
             *bx = Aabb::EMPTY;
             return;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use proptest::prelude::*;
+
+    use super::*;
+
+    /// `axial_range` as it was before a flat cross-section's square root
+    /// was taken once: the oracle of `axial_range_is_the_per_step_one`.
+    fn axial_range_per_step(
+        h: &quadric::HalfSpace,
+        point: &Vector3<f64>,
+        axis: &Vector3<f64>,
+        p: &Matrix3<f64>,
+        r: f64,
+        spread: f64,
+    ) -> Option<(f64, f64)> {
+        let n = *h.normal_vector();
+        let scale_n = n.norm();
+        let n = n / scale_n;
+        let c = h.value(&Point3::from(*point)) / scale_n;
+        let a = n.dot(axis);
+        let g = n.dot(&(p * n)).max(0.0);
+        let (alpha, beta) = (r * g, spread * g);
+        // Require a clear margin so that rounding cannot flip monotonicity.
+        if a * a <= beta * (1.0 + 1e-6) + 1e-12 {
+            return Some((f64::NEG_INFINITY, f64::INFINITY));
+        }
+        let phi = |s: f64| a * s - (alpha + beta * s * s).max(0.0).sqrt() + c;
+        // phi is increasing for a > 0 (feasible: s <= root), decreasing for a < 0.
+        let sign = a.signum();
+        let (mut lo, mut hi) = (-1.0f64, 1.0f64);
+        let mut guard = 0;
+        while sign * phi(lo) > 0.0 || sign * phi(hi) < 0.0 {
+            if sign * phi(lo) > 0.0 {
+                lo *= 2.0;
+            }
+            if sign * phi(hi) < 0.0 {
+                hi *= 2.0;
+            }
+            guard += 1;
+            if guard > 2100 || !lo.is_finite() || !hi.is_finite() {
+                return Some((f64::NEG_INFINITY, f64::INFINITY));
+            }
+        }
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            if sign * phi(mid) <= 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let local = c.abs() / a.abs() + lo.abs();
+        // `c` came from the absolute coordinates of the plane and the axis point.
+        let abs = (point.norm() + h.reference_point().coords.norm()) / a.abs();
+        if a > 0.0 {
+            Some((f64::NEG_INFINITY, widen_up(hi, local, abs)))
+        } else {
+            Some((widen_down(lo, local, abs), f64::INFINITY))
+        }
+    }
+
+    fn coord() -> impl Strategy<Value = f64> {
+        prop_oneof![(-4i32..4).prop_map(|k| f64::from(k) * 0.5), -10.0..10.0f64, Just(0.0), Just(-0.0)]
+    }
+
+    proptest! {
+        /// The same range, bit for bit, for cylinders (`spread = 0`; also
+        /// with `r = 0`, a line) and cones or hyperboloids.
+        #[test]
+        fn axial_range_is_the_per_step_one(
+            n in [coord(), coord(), coord()],
+            d in coord(),
+            point in [coord(), coord(), coord()],
+            axis in [coord(), coord(), coord()],
+            diag in [0.0..4.0f64, 0.0..4.0f64, 0.0..4.0f64],
+            r in prop_oneof![Just(0.0), 0.0..4.0f64],
+            spread in prop_oneof![Just(0.0), Just(-0.0), 0.0..2.0f64],
+        ) {
+            let Ok(h) = quadric::HalfSpace::new(n[0], n[1], n[2], d) else { return Ok(()) };
+            let axis = Vector3::from(axis);
+            let axis = if axis.norm() > 0.0 { axis / axis.norm() } else { Vector3::z() };
+            let (point, p) = (Vector3::from(point), Matrix3::from_diagonal(&Vector3::from(diag)));
+            let bits = |x: Option<(f64, f64)>| x.map(|(lo, hi)| (lo.to_bits(), hi.to_bits()));
+            prop_assert_eq!(
+                bits(axial_range(&h, &point, &axis, &p, r, spread)),
+                bits(axial_range_per_step(&h, &point, &axis, &p, r, spread))
+            );
         }
     }
 }
