@@ -13,6 +13,7 @@
 //! Every bound is rounded outwards, so the box is conservative: it never
 //! cuts off a point of the block.
 
+use arrayvec::ArrayVec;
 use quadric::nalgebra::{Matrix3, Point3, Vector3};
 use quadric::roots::difference_of_products;
 use quadric::{Ray, Solid};
@@ -238,20 +239,18 @@ fn polytope_box(solids: &[Solid]) -> (Aabb, Option<Ball>) {
 /// each may lie from its computed place on every axis; `None` if it is
 /// unbounded or no vertex is found.
 fn polytope_vertices(solids: &[Solid]) -> Option<(Vec<Vector3<f64>>, Aabb, f64)> {
-    let planes: Vec<(Vector3<f64>, f64)> = solids
-        .iter()
-        .filter_map(|s| match s {
-            Solid::HalfSpace(h) => {
-                let n = *h.normal_vector();
-                let m = n.norm();
-                // n·x + (d - n·o) <= 0, normalised.
-                let off = h.value(&Point3::origin());
-                Some((n / m, off / m))
-            }
-            Solid::Quadric(_) => None,
-        })
-        .collect();
-    if planes.len() < 4 || planes.len() > 24 {
+    // At most 24 planes, on the stack: a block of more is not taken as a polytope.
+    let mut planes = ArrayVec::<(Vector3<f64>, f64), 24>::new();
+    for s in solids {
+        if let Solid::HalfSpace(h) = s {
+            let n = *h.normal_vector();
+            let m = n.norm();
+            // n·x + (d - n·o) <= 0, normalised.
+            let off = h.value(&Point3::origin());
+            planes.try_push((n / m, off / m)).ok()?;
+        }
+    }
+    if planes.len() < 4 {
         return None;
     }
     // A direction of recession makes the polyhedron unbounded; treating
@@ -271,7 +270,8 @@ fn polytope_vertices(solids: &[Solid]) -> Option<(Vec<Vector3<f64>>, Aabb, f64)>
         }
     }
     let scale = planes.iter().fold(0.0f64, |m, (_, off)| m.max(off.abs()));
-    let mut vertices = Vec::new();
+    // A box's eight, in one allocation.
+    let mut vertices = Vec::with_capacity(8);
     let mut bx = Aabb::EMPTY;
     for a in 0..planes.len() {
         for b in a + 1..planes.len() {

@@ -438,7 +438,7 @@ impl<const W: usize, const H: usize> Tree<W, H> {
         *cost += half_area(&nodes[n].min, &nodes[n].max);
         let first = nodes[n].start as usize;
         // `(node, binary depth below n)`.
-        let mut children = vec![(first, 1), (first + 1, 1)];
+        let mut children = ArrayVec::<_, W>::from_iter([(first, 1), (first + 1, 1)]);
         while children.len() < W {
             let inner = (0..children.len()).filter(|&j| nodes[children[j].0].count == 0);
             let pick = match open {
