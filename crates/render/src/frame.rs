@@ -2,10 +2,10 @@
 
 use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use quadric::nalgebra::Vector3;
-use rayon::prelude::*;
 
 use crate::error::Error;
 use crate::scene::World;
@@ -306,26 +306,34 @@ pub fn render_until(
     let runs = frame.runs_mut(width * ROWS);
     // One shader for the frame (its material table is built once).
     let shader = Shader::new(world);
-    let rays: u64 = pool.install(|| {
-        runs.into_par_iter()
-            // Every pair of rows its own task: rows differ in cost by orders
-            // of magnitude (sky against glass), and rayon's adaptive split,
-            // made early from the thread count alone, left one of two cores
-            // idle for a quarter of the glass scene.
-            .with_max_len(1)
-            .enumerate()
-            .map(|(b, mut out)| {
+    // Every pair of rows is its own task, taken in order from one queue by
+    // whichever worker is free: rows differ in cost by orders of
+    // magnitude (sky against glass), so a split made early from the thread
+    // count alone (rayon's adaptive split) left one of two cores idle for a
+    // quarter of the glass scene; and the workers render neighbouring rows,
+    // which meet the same blocks, so a large scene's data is fetched into
+    // the shared cache once for all of them (a split in halves has each
+    // worker walk a different half of the scene).
+    let runs = Mutex::new(runs.into_iter().enumerate());
+    // The lock is held only to take the next run (a poisoned lock, after a
+    // panic in another worker, ends this one too).
+    let take = || runs.lock().ok().and_then(|mut r| r.next());
+    let rays: u64 = pool
+        .broadcast(|_| {
+            let mut rays = 0;
+            while let Some((b, mut out)) = take() {
                 if cancel.load(Ordering::Relaxed) {
-                    return 0;
+                    break;
                 }
-                let rays = render_run(&shader, (b * ROWS) as u32, &mut out);
+                rays += render_run(&shader, (b * ROWS) as u32, &mut out);
                 for _ in 0..out.len() / width {
                     progress();
                 }
-                rays
-            })
-            .sum()
-    });
+            }
+            rays
+        })
+        .into_iter()
+        .sum();
     let elapsed = start.elapsed();
     if cancel.load(Ordering::Relaxed) {
         return Err(Error::Interrupted);
