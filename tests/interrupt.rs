@@ -53,11 +53,12 @@ fn a_set_flag_stops_the_render_loop() {
     };
     let (flag, rows) = (AtomicBool::new(false), AtomicU32::new(0));
     assert!(matches!(run(&flag, &rows), Err(render::Error::Interrupted)));
-    // Workers check the flag before each task of two rows. After the third
-    // row's report, the reporting worker reports its task's other row, and
-    // the other worker may finish the two-row task it had started: at most
-    // 3 + 1 + 2 rows. (Without the check all 200 would be rendered.)
-    assert!(rows.load(Ordering::SeqCst) <= 6, "{} rows rendered after the flag", rows.load(Ordering::SeqCst));
+    // Workers check the flag before each task, a band of sixteen rows, and
+    // report its rows when it is done. After the third row's report, the
+    // reporting worker reports its band's other 13 rows, and the other
+    // worker may finish the band it had started: at most 3 + 13 + 16 rows.
+    // (Without the check all 200 would be rendered.)
+    assert!(rows.load(Ordering::SeqCst) <= 32, "{} rows rendered after the flag", rows.load(Ordering::SeqCst));
     // Without the flag the same loop finishes.
     let (flag, rows) = (AtomicBool::new(false), AtomicU32::new(1000));
     assert_eq!(run(&flag, &rows).unwrap().0.len(), 16 * 200);

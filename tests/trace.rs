@@ -158,3 +158,33 @@ fn four_primary_rays_at_once_are_four_single_ones() {
         }
     }
 }
+
+/// The render loop puts every pixel where it belongs: each pixel of a frame
+/// (rendered in bands of rows and square tiles, with 2×2 packets, 1×4 runs
+/// on a last odd row and single rays where a row has pixels left) is
+/// exactly `Shader::primary` of that pixel's own camera ray. Sizes with a
+/// part band, an odd last row, a part tile and an odd last column.
+#[test]
+fn every_pixel_of_a_frame_is_its_own_primary_ray() {
+    use render::shade::{Scratch, Shader};
+    for name in ["table.json", "glass.json"] {
+        for (width, height) in [(37, 35), (16, 16), (5, 3), (1, 1), (40, 33)] {
+            let w = world(&scene(name), Some((width, height)));
+            let frame = crate::support::render_frame(&w);
+            let shader = Shader::new(&w);
+            let mut scratch = Scratch::default();
+            for i in 0..height {
+                for j in 0..width {
+                    let (c, hit) = shader.primary(&w.camera.ray(i, j), &mut scratch);
+                    let p = frame.at(i, j);
+                    let at = format!("{name} {width}x{height} pixel ({i}, {j})");
+                    assert_eq!(p.rgb, [c.x as f32, c.y as f32, c.z as f32], "{at}");
+                    assert_eq!(p.alpha, if hit.is_some() { 1.0 } else { 0.0 }, "{at}");
+                    assert_eq!(p.depth, hit.map_or(f32::INFINITY, |s| s.t as f32), "{at}");
+                    assert_eq!(p.block, hit.map_or(0, |s| s.block.0 + 1), "{at}");
+                    assert_eq!(p.object, hit.map_or(0, |s| s.solid + 1), "{at}");
+                }
+            }
+        }
+    }
+}

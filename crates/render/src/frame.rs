@@ -280,8 +280,8 @@ pub fn render(world: &World, options: Options, progress: &(dyn Fn() + Sync)) -> 
 }
 
 /// [`render`], stopping early with [`Error::Interrupted`] once `cancel` is
-/// set (e.g. by a Ctrl-C handler). Workers look at the flag before each pair of rows,
-/// so the render stops within about two rows' time per thread.
+/// set (e.g. by a Ctrl-C handler). Workers look at the flag before each task
+/// (a band of sixteen rows), so the render stops within about one band's time.
 pub fn render_until(
     world: &World,
     options: Options,
@@ -306,11 +306,11 @@ pub fn render_until(
     let runs = frame.runs_mut(width * ROWS);
     // One shader for the frame (its material table is built once).
     let shader = Shader::new(world);
-    // Every pair of rows is its own task, taken in order from one queue by
+    // Every band of rows is its own task, taken in order from one queue by
     // whichever worker is free: rows differ in cost by orders of
     // magnitude (sky against glass), so a split made early from the thread
     // count alone (rayon's adaptive split) left one of two cores idle for a
-    // quarter of the glass scene; and the workers render neighbouring rows,
+    // quarter of the glass scene; and the workers render neighbouring bands,
     // which meet the same blocks, so a large scene's data is fetched into
     // the shared cache once for all of them (a split in halves has each
     // worker walk a different half of the scene).
@@ -341,12 +341,21 @@ pub fn render_until(
     Ok((frame, Stats { rays, elapsed }))
 }
 
-/// Rows per render task: two, so that four rays of a 2×2 square of pixels
-/// can share one walk of the BVH.
-const ROWS: usize = 2;
+/// Rows per render task (a band): a multiple of two, so that four rays of
+/// a 2×2 square of pixels can share one walk of the BVH; sixteen, so that
+/// a band's tiles are square (see [`COLS`]), while the last band a worker
+/// finishes alone is still short.
+const ROWS: usize = 16;
 
-/// Renders the rows from `i0` on into `out` (one or two whole rows),
-/// returning the rays cast.
+/// Columns of a tile: a task's rows are rendered [`COLS`] columns at a
+/// time, so that the rays that follow each other are neighbours in both
+/// directions and find the blocks and nodes their neighbours read still in
+/// the cache. A multiple of four, so that the 2×2 squares and 1×4 runs
+/// fall on the same pixels as over whole rows.
+const COLS: usize = 16;
+
+/// Renders the rows from `i0` on into `out` (whole rows, at most
+/// [`ROWS`]), returning the rays cast.
 fn render_rows(shader: &Shader, i0: u32, out: &mut [Pixel]) -> u64 {
     let world = shader.world();
     let mut scratch = Scratch::default();
@@ -361,27 +370,41 @@ fn render_rows(shader: &Shader, i0: u32, out: &mut [Pixel]) -> u64 {
         }
         return scratch.rays;
     }
-    // The pixel centres four at a time (SPEC §4): 2×2 squares, or 1×4 runs
-    // on a last single row. The four rays share one walk of the BVH
-    // (`Shader::primary4`), with the same results as one by one.
-    let (tile_w, rows) = if out.len() == 2 * width { (2, 2) } else { (4, 1) };
-    let mut j = 0;
-    while j + tile_w <= width {
-        let at = |k: usize| (i0 + (k / tile_w) as u32, (j + k % tile_w) as u32);
-        let rays = cam.rays4([0, 1, 2, 3].map(|k| {
-            let (i, j) = at(k);
-            (f64::from(i), f64::from(j))
-        }));
-        for (k, (c, hit)) in shader.primary4(&rays, &mut scratch).into_iter().enumerate() {
-            let (i, j) = at(k);
-            out[(i - i0) as usize * width + j as usize] = pixel_of(c, if hit.is_some() { 1.0 } else { 0.0 }, hit);
-        }
-        j += tile_w;
-    }
-    for i in i0..i0 + rows {
-        for j in j as u32..cam.width() {
-            let (c, hit) = shader.primary(&cam.ray(i, j), &mut scratch);
-            out[(i - i0) as usize * width + j as usize] = pixel_of(c, if hit.is_some() { 1.0 } else { 0.0 }, hit);
+    let rows = out.len() / width;
+    for j0 in (0..width).step_by(COLS) {
+        let j1 = (j0 + COLS).min(width);
+        let mut r = 0;
+        while r < rows {
+            let i = i0 + r as u32;
+            let pair = if rows - r >= 2 { 2 } else { 1 };
+            // The pixel centres four at a time (SPEC §4): 2×2 squares, or
+            // 1×4 runs on a last single row. The four rays share one walk of
+            // the BVH (`Shader::primary4`), with the same results as one by
+            // one.
+            let tile_w = if pair == 2 { 2 } else { 4 };
+            let mut j = j0;
+            while j + tile_w <= j1 {
+                let at = |k: usize| (i + (k / tile_w) as u32, (j + k % tile_w) as u32);
+                let rays = cam.rays4([0, 1, 2, 3].map(|k| {
+                    let (i, j) = at(k);
+                    (f64::from(i), f64::from(j))
+                }));
+                for (k, (c, hit)) in shader.primary4(&rays, &mut scratch).into_iter().enumerate() {
+                    let (i, j) = at(k);
+                    out[(i - i0) as usize * width + j as usize] =
+                        pixel_of(c, if hit.is_some() { 1.0 } else { 0.0 }, hit);
+                }
+                j += tile_w;
+            }
+            // Left over at the end of a row (only in the last tile).
+            for i in i..i + pair as u32 {
+                for j in j as u32..j1 as u32 {
+                    let (c, hit) = shader.primary(&cam.ray(i, j), &mut scratch);
+                    out[(i - i0) as usize * width + j as usize] =
+                        pixel_of(c, if hit.is_some() { 1.0 } else { 0.0 }, hit);
+                }
+            }
+            r += pair;
         }
     }
     scratch.rays
