@@ -256,6 +256,56 @@ pub(crate) struct RayBoxes4 {
     forward: [f64x4; 3],
 }
 
+/// Per axis, bounds over the four rays of a packet, from which
+/// [`RayBoxes4::cull`] finds, for all the children of a node at once, a
+/// lower bound of every ray's entry and an upper bound of its exit (see
+/// there): the least and greatest reciprocal, and the shifts that give the
+/// smallest entry and the largest exit (`-∞` and `+∞` on an axis where the
+/// rays' reciprocals are not all finite or do not all have one sign: no
+/// bound there).
+#[derive(Clone, Copy, Debug)]
+struct PacketBounds {
+    inv_min: [f64; 3],
+    inv_max: [f64; 3],
+    /// Added to the face met first: `min shift_lo` going forward, `max
+    /// shift_hi` going backward.
+    entry_shift: [f64; 3],
+    /// Added to the face met last: `max shift_hi` forward, `min shift_lo`
+    /// backward.
+    exit_shift: [f64; 3],
+    forward: [bool; 3],
+}
+
+impl PacketBounds {
+    /// No bound on any axis.
+    const NONE: PacketBounds = PacketBounds {
+        inv_min: [1.0; 3],
+        inv_max: [1.0; 3],
+        entry_shift: [f64::NEG_INFINITY; 3],
+        exit_shift: [f64::INFINITY; 3],
+        forward: [true; 3],
+    };
+
+    /// The bounds of the four rays of `rays`.
+    fn new(rays: &RayBoxes4) -> Self {
+        let mut b = PacketBounds::NONE;
+        for i in 0..3 {
+            let inv = rays.inv[i].to_array();
+            let forward = inv.iter().all(|&v| v >= 0.0);
+            if !(inv.iter().all(|v| v.is_finite()) && (forward || inv.iter().all(|&v| v < 0.0))) {
+                continue;
+            }
+            let lo = rays.shift_lo[i].to_array().iter().fold(f64::INFINITY, |m, &v| m.min(v));
+            let hi = rays.shift_hi[i].to_array().iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
+            b.inv_min[i] = inv.iter().fold(f64::INFINITY, |m, &v| m.min(v));
+            b.inv_max[i] = inv.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
+            (b.entry_shift[i], b.exit_shift[i]) = if forward { (lo, hi) } else { (hi, lo) };
+            b.forward[i] = forward;
+        }
+        b
+    }
+}
+
 impl RayBoxes4 {
     pub(crate) fn new(rays: &[RayBoxes; 4]) -> Self {
         let lanes = |f: &dyn Fn(&RayBoxes) -> f64| f64x4::new([f(&rays[0]), f(&rays[1]), f(&rays[2]), f(&rays[3])]);
@@ -266,6 +316,56 @@ impl RayBoxes4 {
             shift_hi: [0, 1, 2].map(|i| lanes(&|r| r.shift_hi[i])),
             forward: inv.map(|v| v.cmp_ge(f64x4::splat(0.0))),
         }
+    }
+
+    /// A bit for each child of `node` that one of the four rays (whose
+    /// bounds are `b`) may enter within `[t_min, t_max]` (`t_max`: the
+    /// largest of the lanes' that count): every child some ray enters by
+    /// [`RayBoxes4::enter_child`] has its bit, so testing only those gives
+    /// the same answers. One test for all four rays, the children four at a
+    /// time, instead of a test per child for the four rays: in an
+    /// eight-wide node a packet enters few of the eight.
+    ///
+    /// Why no child a ray enters is culled: on an axis with bounds, every
+    /// ray's reciprocal `v` is finite, of one sign, in `[inv_min, inv_max]`,
+    /// and its face plus shift is at least `P` (the face met first plus
+    /// `entry_shift`, rounded: rounding is monotone). So its entry on that
+    /// axis, the rounded `(face + shift)·v`, is at least the rounded `P·v`,
+    /// which is monotone in `v` for a fixed `P`: at least the smaller of
+    /// `P·inv_min` and `P·inv_max`. So `T0`, the largest of these bounds and
+    /// `t_min`, is at most every ray's `t0`; likewise `T1`, from the exit
+    /// faces, at least every ray's `t1`. A ray enters only if `t0 <= t1 +
+    /// slack` with `slack = 4ε·max(|t0|, |t1|)`; with `M = max(|T0|, |T1|)`,
+    /// `S = 16ε·M` covers that slack where `|t0|, |t1| <= 3.99 M`, and
+    /// where one of them is larger the gap between them is far wider than
+    /// its slack (the larger is then positive and above `3.99 M` for `t0`,
+    /// negative and below `-3.99 M` for `t1`). So `T0 > T1 + S` means no
+    /// ray enters. NaN (an empty lane: `∞ - ∞`; an axis without bounds)
+    /// fails every comparison and culls nothing.
+    #[inline(always)]
+    fn cull<const W: usize, const H: usize>(b: &PacketBounds, node: &Wide<W, H>, t_min: f64, t_max: f64) -> u32 {
+        let mut mask = 0;
+        for g in 0..H {
+            let (mut t0, mut t1) = (f64x4::splat(t_min), f64x4::splat(t_max));
+            for i in 0..3 {
+                let (first, last) =
+                    if b.forward[i] { (node.min[i][g], node.max[i][g]) } else { (node.max[i][g], node.min[i][g]) };
+                let p = first + f64x4::splat(b.entry_shift[i]);
+                let q = last + f64x4::splat(b.exit_shift[i]);
+                let (v0, v1) = (f64x4::splat(b.inv_min[i]), f64x4::splat(b.inv_max[i]));
+                let (p0, p1) = (p * v0, p * v1);
+                let (q0, q1) = (q * v0, q * v1);
+                let enter = p0.cmp_lt(p1).blend(p0, p1);
+                let exit = q0.cmp_gt(q1).blend(q0, q1);
+                // NaN keeps the bound as it was.
+                t0 = enter.cmp_gt(t0).blend(enter, t0);
+                t1 = exit.cmp_lt(t1).blend(exit, t1);
+            }
+            let s = f64x4::splat(16.0 * f64::EPSILON) * t0.abs().max(t1.abs());
+            let culled = t0.cmp_gt(t1 + s);
+            mask |= (!(culled.move_mask() as u32) & 0b1111) << (4 * g);
+        }
+        mask
     }
 
     /// Child `c` of `node` against the four rays: their entries and a bit
@@ -552,6 +652,8 @@ impl<const W: usize, const H: usize> Tree<W, H> {
             return;
         }
         let t_min4 = f64x4::splat(t_min);
+        // Only eight-wide walks cull (see below).
+        let bounds = if H > 1 { PacketBounds::new(rays) } else { PacketBounds::NONE };
         // `(child | count << 32, lanes)` and each lane's entry.
         let mut stack: ArrayVec<(u64, u32, f64x4), STACK> = ArrayVec::new();
         // The next entry, kept out of the stack as in `walk`.
@@ -587,11 +689,11 @@ impl<const W: usize, const H: usize> Tree<W, H> {
             let mut masks = [0u32; W];
             let mut order = [(0.0f64, 0usize); W];
             let mut n = 0;
-            for c in 0..W {
+            let mut child = |c: usize| {
                 let (entry, hits) = rays.enter_child(node, c, t_min4, t_max4);
                 let hits = hits & lanes;
                 if hits == 0 {
-                    continue;
+                    return;
                 }
                 // The nearest entry among the lanes that enter.
                 let e = entry.to_array();
@@ -599,6 +701,19 @@ impl<const W: usize, const H: usize> Tree<W, H> {
                 entries[c] = entry;
                 masks[c] = hits;
                 insert_nearest(&mut order, &mut n, (key, c));
+            };
+            if H == 1 {
+                // A four-wide node's four children cost the packet test
+                // about what the cull would: each is tested.
+                (0..W).for_each(child);
+            } else {
+                let reach = (0..4).filter(|l| lanes & (1 << l) != 0).fold(f64::NEG_INFINITY, |m, l| m.max(t_max[l]));
+                let mut maybe = RayBoxes4::cull(&bounds, node, t_min, reach);
+                while maybe != 0 {
+                    let c = maybe.trailing_zeros() as usize;
+                    maybe &= maybe - 1;
+                    child(c);
+                }
             }
             // Cannot overflow: see `STACK`.
             for &(_, c) in order[1..n.max(1)].iter().rev() {
@@ -960,6 +1075,54 @@ mod tests {
             .prop_filter_map("zero direction", |(o, d)| Ray::new(Point3::from(o), Vector3::from(d)).ok())
     }
 
+    /// A box's lower and upper corner.
+    type Corners = ([f64; 3], [f64; 3]);
+
+    /// Four rays for a packet and eight boxes (`None`: an empty lane).
+    fn packet_and_boxes() -> impl Strategy<Value = ([Ray; 4], Vec<Option<Corners>>)> {
+        let scale = prop_oneof![Just(1.0), Just(1e3), Just(1e9)];
+        let axis_or_not = || prop_oneof![3 => -1.0..1.0f64, 1 => Just(0.0)];
+        let dir = [axis_or_not(), axis_or_not(), axis_or_not()];
+        let spread = prop_oneof![Just(0.0), Just(1e-3), Just(1.0)];
+        let shared = any::<bool>();
+        let jitter = || prop::array::uniform4(prop::array::uniform3(-1.0..1.0f64));
+        (scale, [coord(), coord(), coord()], dir, spread, shared, jitter(), jitter())
+            .prop_filter_map("zero direction", |(scale, o, d, spread, shared, jitter_o, jitter_d)| {
+                let rays: Option<Vec<Ray>> = (0..4)
+                    .map(|l| {
+                        let origin = [0, 1, 2].map(|i| (o[i] + if shared { 0.0 } else { jitter_o[l][i] }) * scale);
+                        let dir = [0, 1, 2].map(|i| d[i] + spread * jitter_d[l][i]);
+                        Ray::new(Point3::from(origin), Vector3::from(dir)).ok()
+                    })
+                    .collect();
+                let rays: [Ray; 4] = rays?.try_into().ok()?;
+                Some((rays, scale))
+            })
+            .prop_flat_map(|(rays, scale)| {
+                // A box at random (scaled with the origins), or one with a
+                // corner on a point of one ray, reaching away or across.
+                let one = prop_oneof![
+                    1 => Just(None),
+                    2 => boxed().prop_map(move |(lo, hi)| Some((lo.map(|x| x * scale), hi.map(|x| x * scale)))),
+                    3 => (0..4usize, 0.0..3.0f64, prop::array::uniform3(0.0..2.0f64), prop::array::uniform3(any::<bool>()))
+                        .prop_map(move |(l, t, size, below)| {
+                            let p = rays[l].at(t * scale);
+                            let mut lo = [p.x, p.y, p.z];
+                            let mut hi = lo;
+                            for i in 0..3 {
+                                if below[i] {
+                                    lo[i] -= size[i] * scale;
+                                } else {
+                                    hi[i] += size[i] * scale;
+                                }
+                            }
+                            Some((lo, hi))
+                        }),
+                ];
+                (Just(rays), prop::collection::vec(one, 8))
+            })
+    }
+
     fn boxed() -> impl Strategy<Value = ([f64; 3], [f64; 3])> {
         let size = || prop_oneof![0.0..3.0f64, Just(0.0)];
         ([coord(), coord(), coord()], [size(), size(), size()])
@@ -1090,6 +1253,39 @@ mod tests {
                 let eight = lane0::<8, 2>(&rb, &b.0, &b.1, lane, t_min, t_max);
                 prop_assert_eq!(scalar, four.map(f64::to_bits));
                 prop_assert_eq!(scalar, eight.map(f64::to_bits));
+            }
+        }
+
+        /// The packet cull of an eight-wide node keeps every child that one
+        /// of the active rays enters by its own test (`enter_child`, each
+        /// lane the scalar test to the bit): four rays from one point or
+        /// from four, near each other or not, near the origin or far from
+        /// it, parallel to axes or not; boxes placed at random or through
+        /// a point of one of the rays (where only the slack lets the ray
+        /// in), empty lanes included.
+        #[test]
+        fn packet_cull_keeps_every_child_a_ray_enters(
+            (rays, boxes) in packet_and_boxes(),
+            t_min in prop_oneof![Just(0.0), 0.0..2.0f64],
+            t_max in prop::array::uniform4(prop_oneof![Just(f64::INFINITY), 0.0..50.0f64]),
+            lanes in 1..16u32,
+        ) {
+            let rbs = rays.each_ref().map(RayBoxes::new);
+            let packet = RayBoxes4::new(&rbs);
+            let mut node = Wide::<8, 2>::EMPTY;
+            for (c, b) in boxes.iter().enumerate() {
+                if let Some((lo, hi)) = b {
+                    node.set_box(c, lo, hi);
+                }
+            }
+            let t_max = t_max.map(|t| t.max(t_min));
+            let reach = (0..4).filter(|l| lanes & (1 << l) != 0).fold(f64::NEG_INFINITY, |m, l| m.max(t_max[l]));
+            let kept = RayBoxes4::cull(&PacketBounds::new(&packet), &node, t_min, reach);
+            for c in 0..8 {
+                let (_, hits) = packet.enter_child(&node, c, f64x4::splat(t_min), f64x4::new(t_max));
+                if hits & lanes != 0 {
+                    prop_assert!(kept & (1 << c) != 0, "child {} entered by lanes {:#b} but culled", c, hits & lanes);
+                }
             }
         }
 
