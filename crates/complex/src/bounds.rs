@@ -570,57 +570,91 @@ fn axial_range(
     r: f64,
     spread: f64,
 ) -> Option<(f64, f64)> {
-    let n = *h.normal_vector();
-    let scale_n = n.norm();
-    let n = n / scale_n;
-    let c = h.value(&Point3::from(*point)) / scale_n;
-    let a = n.dot(axis);
-    let g = n.dot(&(p * n)).max(0.0);
-    let (alpha, beta) = (r * g, spread * g);
-    // Require a clear margin so that rounding cannot flip monotonicity.
-    if a * a <= beta * (1.0 + 1e-6) + 1e-12 {
+    let Some(k) = Axial::new(h, point, axis, p, r, spread) else {
         return Some((f64::NEG_INFINITY, f64::INFINITY));
-    }
+    };
     // A cylinder's cross-section does not widen (`β = 0`): its support is
     // the same square root at every `s` (`0·s² = 0`), taken once, off the
     // bisection's chain of dependent steps. Only the sign of a zero can
-    // differ, which none of the comparisons below reads.
-    let flat = alpha.max(0.0).sqrt();
-    let phi = |s: f64| a * s - if beta == 0.0 { flat } else { (alpha + beta * s * s).max(0.0).sqrt() } + c;
-    // phi is increasing for a > 0 (feasible: s <= root), decreasing for a < 0.
-    let sign = a.signum();
-    let (mut lo, mut hi) = (-1.0f64, 1.0f64);
-    let mut guard = 0;
-    while sign * phi(lo) > 0.0 || sign * phi(hi) < 0.0 {
-        if sign * phi(lo) > 0.0 {
-            lo *= 2.0;
+    // differ, which none of the comparisons in `Axial::solve` reads.
+    let flat = k.alpha.max(0.0).sqrt();
+    k.solve(|s: f64| k.a * s - if k.beta == 0.0 { flat } else { (k.alpha + k.beta * s * s).max(0.0).sqrt() } + k.c)
+}
+
+/// The parts of [`axial_range`]'s inequality `a s + c <= sqrt(α + β s²)`,
+/// and the magnitude of the absolute coordinates `c` came from.
+struct Axial {
+    a: f64,
+    c: f64,
+    alpha: f64,
+    beta: f64,
+    abs: f64,
+}
+
+impl Axial {
+    /// `None` where the plane is not clearly steeper than the cone (the
+    /// range is then the whole line).
+    fn new(
+        h: &quadric::HalfSpace,
+        point: &Vector3<f64>,
+        axis: &Vector3<f64>,
+        p: &Matrix3<f64>,
+        r: f64,
+        spread: f64,
+    ) -> Option<Self> {
+        let n = *h.normal_vector();
+        let scale_n = n.norm();
+        let n = n / scale_n;
+        let c = h.value(&Point3::from(*point)) / scale_n;
+        let a = n.dot(axis);
+        let g = n.dot(&(p * n)).max(0.0);
+        let (alpha, beta) = (r * g, spread * g);
+        // Require a clear margin so that rounding cannot flip monotonicity.
+        if a * a <= beta * (1.0 + 1e-6) + 1e-12 {
+            return None;
         }
-        if sign * phi(hi) < 0.0 {
-            hi *= 2.0;
-        }
-        guard += 1;
-        if guard > 2100 || !lo.is_finite() || !hi.is_finite() {
-            return Some((f64::NEG_INFINITY, f64::INFINITY));
-        }
+        // `c` came from the absolute coordinates of the plane and the axis point.
+        let abs = (point.norm() + h.reference_point().coords.norm()) / a.abs();
+        Some(Axial { a, c, alpha, beta, abs })
     }
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if mid <= lo || mid >= hi {
-            break;
+
+    /// The half-line where `phi(s) = a s - sqrt(α + β s²) + c` has the
+    /// feasible sign, by bracketing and bisection, widened for rounding.
+    fn solve(&self, phi: impl Fn(f64) -> f64) -> Option<(f64, f64)> {
+        let a = self.a;
+        // phi is increasing for a > 0 (feasible: s <= root), decreasing for a < 0.
+        let sign = a.signum();
+        let (mut lo, mut hi) = (-1.0f64, 1.0f64);
+        let mut guard = 0;
+        while sign * phi(lo) > 0.0 || sign * phi(hi) < 0.0 {
+            if sign * phi(lo) > 0.0 {
+                lo *= 2.0;
+            }
+            if sign * phi(hi) < 0.0 {
+                hi *= 2.0;
+            }
+            guard += 1;
+            if guard > 2100 || !lo.is_finite() || !hi.is_finite() {
+                return Some((f64::NEG_INFINITY, f64::INFINITY));
+            }
         }
-        if sign * phi(mid) <= 0.0 {
-            lo = mid;
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            if sign * phi(mid) <= 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let local = self.c.abs() / a.abs() + lo.abs();
+        if a > 0.0 {
+            Some((f64::NEG_INFINITY, widen_up(hi, local, self.abs)))
         } else {
-            hi = mid;
+            Some((widen_down(lo, local, self.abs), f64::INFINITY))
         }
-    }
-    let local = c.abs() / a.abs() + lo.abs();
-    // `c` came from the absolute coordinates of the plane and the axis point.
-    let abs = (point.norm() + h.reference_point().coords.norm()) / a.abs();
-    if a > 0.0 {
-        Some((f64::NEG_INFINITY, widen_up(hi, local, abs)))
-    } else {
-        Some((widen_down(lo, local, abs), f64::INFINITY))
     }
 }
 
@@ -831,7 +865,8 @@ mod tests {
     use super::*;
 
     /// `axial_range` as it was before a flat cross-section's square root
-    /// was taken once: the oracle of `axial_range_is_the_per_step_one`.
+    /// was taken once (the square root at every step of the same search):
+    /// the oracle of `axial_range_is_the_per_step_one`.
     fn axial_range_per_step(
         h: &quadric::HalfSpace,
         point: &Vector3<f64>,
@@ -840,53 +875,10 @@ mod tests {
         r: f64,
         spread: f64,
     ) -> Option<(f64, f64)> {
-        let n = *h.normal_vector();
-        let scale_n = n.norm();
-        let n = n / scale_n;
-        let c = h.value(&Point3::from(*point)) / scale_n;
-        let a = n.dot(axis);
-        let g = n.dot(&(p * n)).max(0.0);
-        let (alpha, beta) = (r * g, spread * g);
-        // Require a clear margin so that rounding cannot flip monotonicity.
-        if a * a <= beta * (1.0 + 1e-6) + 1e-12 {
+        let Some(k) = Axial::new(h, point, axis, p, r, spread) else {
             return Some((f64::NEG_INFINITY, f64::INFINITY));
-        }
-        let phi = |s: f64| a * s - (alpha + beta * s * s).max(0.0).sqrt() + c;
-        // phi is increasing for a > 0 (feasible: s <= root), decreasing for a < 0.
-        let sign = a.signum();
-        let (mut lo, mut hi) = (-1.0f64, 1.0f64);
-        let mut guard = 0;
-        while sign * phi(lo) > 0.0 || sign * phi(hi) < 0.0 {
-            if sign * phi(lo) > 0.0 {
-                lo *= 2.0;
-            }
-            if sign * phi(hi) < 0.0 {
-                hi *= 2.0;
-            }
-            guard += 1;
-            if guard > 2100 || !lo.is_finite() || !hi.is_finite() {
-                return Some((f64::NEG_INFINITY, f64::INFINITY));
-            }
-        }
-        for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if mid <= lo || mid >= hi {
-                break;
-            }
-            if sign * phi(mid) <= 0.0 {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        let local = c.abs() / a.abs() + lo.abs();
-        // `c` came from the absolute coordinates of the plane and the axis point.
-        let abs = (point.norm() + h.reference_point().coords.norm()) / a.abs();
-        if a > 0.0 {
-            Some((f64::NEG_INFINITY, widen_up(hi, local, abs)))
-        } else {
-            Some((widen_down(lo, local, abs), f64::INFINITY))
-        }
+        };
+        k.solve(|s: f64| k.a * s - (k.alpha + k.beta * s * s).max(0.0).sqrt() + k.c)
     }
 
     fn coord() -> impl Strategy<Value = f64> {

@@ -869,13 +869,26 @@ struct Entry {
     centre: [f64; 3],
 }
 
+/// The box of the blocks' boxes.
 fn bounds_of(work: &[Entry]) -> ([f64; 3], [f64; 3]) {
+    span(work, |e| (&e.min, &e.max))
+}
+
+/// The box of the blocks' box centres.
+fn centroid_bounds(work: &[Entry]) -> ([f64; 3], [f64; 3]) {
+    span(work, |e| (&e.centre, &e.centre))
+}
+
+/// The smallest box holding every entry's `(lower, upper)` corners.
+#[inline(always)]
+fn span(work: &[Entry], corners: impl Fn(&Entry) -> (&[f64; 3], &[f64; 3])) -> ([f64; 3], [f64; 3]) {
     let mut min = [f64::INFINITY; 3];
     let mut max = [f64::NEG_INFINITY; 3];
     for e in work {
+        let (lo, hi) = corners(e);
         for i in 0..3 {
-            min[i] = min[i].min(e.min[i]);
-            max[i] = max[i].max(e.max[i]);
+            min[i] = min[i].min(lo[i]);
+            max[i] = max[i].max(hi[i]);
         }
     }
     (min, max)
@@ -913,14 +926,7 @@ fn split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<usize> {
 /// so skipping it changes nothing. Small subtrees, most of the nodes, fill
 /// only a few of the bins.
 fn sah_split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<usize> {
-    let mut cmin = [f64::INFINITY; 3];
-    let mut cmax = [f64::NEG_INFINITY; 3];
-    for e in work.iter() {
-        for i in 0..3 {
-            cmin[i] = cmin[i].min(e.centre[i]);
-            cmax[i] = cmax[i].max(e.centre[i]);
-        }
-    }
+    let (cmin, cmax) = centroid_bounds(work);
     let parent = half_area(min, max);
     // Also skips NaN extents.
     let open = |axis: usize| (cmax[axis] - cmin[axis]).partial_cmp(&0.0) == Some(core::cmp::Ordering::Greater);
@@ -989,7 +995,13 @@ fn sah_split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<usize
     // found still separates the centres.
     let (_, axis, bins_left) = best?;
     let goes_left = |e: &Entry| bin(e, axis) < bins_left;
-    // In-place partition.
+    let i = partition(work, goes_left);
+    (i > 0 && i < work.len()).then_some(i)
+}
+
+/// Moves the entries that go left to the front, in place, and returns
+/// their number.
+fn partition(work: &mut [Entry], goes_left: impl Fn(&Entry) -> bool) -> usize {
     let mut i = 0;
     for j in 0..work.len() {
         if goes_left(&work[j]) {
@@ -997,7 +1009,7 @@ fn sah_split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<usize
             i += 1;
         }
     }
-    (i > 0 && i < work.len()).then_some(i)
+    i
 }
 
 #[cfg(test)]
@@ -1133,14 +1145,7 @@ mod tests {
     /// bin of every axis swept, each axis binned in a pass of its own): the
     /// oracle of `sah_split_is_the_sweep_over_every_bin`.
     fn sah_split_every_bin(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Option<usize> {
-        let mut cmin = [f64::INFINITY; 3];
-        let mut cmax = [f64::NEG_INFINITY; 3];
-        for e in work.iter() {
-            for i in 0..3 {
-                cmin[i] = cmin[i].min(e.centre[i]);
-                cmax[i] = cmax[i].max(e.centre[i]);
-            }
-        }
+        let (cmin, cmax) = centroid_bounds(work);
         let parent = half_area(min, max);
         let mut best: Option<(f64, usize, usize)> = None; // (cost, axis, bins on the left)
         for axis in 0..3 {
@@ -1197,14 +1202,7 @@ mod tests {
         let extent = cmax[axis] - cmin[axis];
         let scale = BINS as f64 / extent;
         let goes_left = |e: &Entry| (((e.centre[axis] - cmin[axis]) * scale) as usize).min(BINS - 1) < bins_left;
-        // In-place partition.
-        let mut i = 0;
-        for j in 0..work.len() {
-            if goes_left(&work[j]) {
-                work.swap(i, j);
-                i += 1;
-            }
-        }
+        let i = partition(work, goes_left);
         (i > 0 && i < work.len()).then_some(i)
     }
 
