@@ -235,8 +235,12 @@ fn run(command: Command) -> Result<(), Error> {
                     b.inc(1);
                 }
             };
-            let (frame, stats) =
-                render::frame::render_until(&world, render::frame::Options { threads }, &tick, &cancel)?;
+            let (frame, stats) = render::frame::render_until(
+                &world,
+                render::frame::Options { threads, colour_only: false },
+                &tick,
+                &cancel,
+            )?;
             if let Some(b) = &bar {
                 b.finish_and_clear();
             }

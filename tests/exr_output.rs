@@ -121,3 +121,26 @@ fn a_frame_with_a_short_plane_is_an_error_and_writes_nothing() {
     assert!(!out.exists());
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "a temporary file was left behind");
 }
+
+/// A colour-only frame (`Options::colour_only`: no AOV planes) is written
+/// with `R G B A` alone, read back by the independent reader with the full
+/// frame's colours.
+#[test]
+fn a_colour_only_frame_writes_rgba_alone() {
+    let dir = tempdir();
+    let w = world(&crate::support::scene("table.json"), Some((20, 14)));
+    let options = render::frame::Options { threads: Some(2), colour_only: true };
+    let (frame, _) = render::frame::render(&w, options, &|| {}).unwrap();
+    let full = render_frame(&w);
+    let out = dir.path().join("colour.exr");
+    render::exr::write_exr(frame, &out, render::exr::ColorType::F32).unwrap();
+    let Some(exr) = read_exr(&out) else { return };
+    let names: Vec<&str> = exr.channels.keys().map(String::as_str).collect();
+    assert_eq!(names, COLOUR);
+    for (k, p) in full.pixels().enumerate() {
+        let (i, j) = (k / 20, k % 20);
+        for (c, want) in [("R", p.rgb[0]), ("G", p.rgb[1]), ("B", p.rgb[2]), ("A", p.alpha)] {
+            assert_eq!(exr.at(c, i, j), f64::from(want), "{c} at ({i},{j})");
+        }
+    }
+}

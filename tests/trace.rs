@@ -163,7 +163,9 @@ fn four_primary_rays_at_once_are_four_single_ones() {
 /// (rendered in bands of rows and square tiles, with 2×2 packets, 1×4 runs
 /// on a last odd row and single rays where a row has pixels left) is
 /// exactly `Shader::primary` of that pixel's own camera ray. Sizes with a
-/// part band, an odd last row, a part tile and an odd last column.
+/// part band, an odd last row, a part tile and an odd last column. A
+/// colour-only frame (`Options::colour_only`) has the same colours and
+/// coverage, and no AOV planes.
 #[test]
 fn every_pixel_of_a_frame_is_its_own_primary_ray() {
     use render::shade::{Scratch, Shader};
@@ -171,6 +173,12 @@ fn every_pixel_of_a_frame_is_its_own_primary_ray() {
         for (width, height) in [(37, 35), (16, 16), (5, 3), (1, 1), (40, 33)] {
             let w = world(&scene(name), Some((width, height)));
             let frame = crate::support::render_frame(&w);
+            // Colour only (`komplex bench`): the same colours, no AOV planes.
+            let options = render::frame::Options { threads: Some(2), colour_only: true };
+            let colour = render::frame::render(&w, options, &|| {}).unwrap().0;
+            assert!(frame.has_aovs() && !colour.has_aovs(), "{name} {width}x{height}");
+            let n = (width * height) as usize;
+            assert_eq!(colour.plane_lengths(), [n, n, n, n, 0, 0, 0, 0, 0, 0], "{name} {width}x{height}");
             let shader = Shader::new(&w);
             let mut scratch = Scratch::default();
             for i in 0..height {
@@ -183,6 +191,9 @@ fn every_pixel_of_a_frame_is_its_own_primary_ray() {
                     assert_eq!(p.depth, hit.map_or(f32::INFINITY, |s| s.t as f32), "{at}");
                     assert_eq!(p.block, hit.map_or(0, |s| s.block.0 + 1), "{at}");
                     assert_eq!(p.object, hit.map_or(0, |s| s.solid + 1), "{at}");
+                    let q = colour.at(i, j);
+                    assert_eq!((q.rgb, q.alpha), (p.rgb, p.alpha), "{at}, colour only");
+                    assert_eq!((q.depth, q.normal, q.block, q.object), (0.0, [0.0; 3], 0, 0), "{at}, colour only");
                 }
             }
         }

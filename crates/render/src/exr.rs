@@ -31,13 +31,16 @@ pub enum ColorType {
 /// ray, `+∞` on a miss), `N.X`, `N.Y`, `N.Z` (f32 world-space normal facing
 /// the camera, 0 on a miss), `id.block`, `id.object` (u32, 1-based, 0 on a miss).
 ///
-/// A frame whose planes do not all hold `width * height` samples (one built
-/// by hand) is an [`Error::Encode`], and nothing is written.
+/// A colour-only frame ([`Options::colour_only`](crate::frame::Options),
+/// whose AOV planes are empty) is written with `R G B A` alone. A frame
+/// whose planes do not all hold `width * height` samples otherwise (one
+/// built by hand) is an [`Error::Encode`], and nothing is written.
 pub fn write_exr(frame: Frame, path: &Path, color: ColorType) -> Result<(), Error> {
     let size = (frame.width as usize, frame.height as usize);
     let n = size.0 * size.1;
     let lengths = frame.plane_lengths();
-    if lengths.iter().any(|&l| l != n) {
+    let colour_only = n > 0 && lengths[4..].iter().all(|&l| l == 0);
+    if lengths.iter().enumerate().any(|(i, &l)| l != if colour_only && i >= 4 { 0 } else { n }) {
         let message = format!(
             "the frame is {}x{}, so every plane needs {n} samples; the planes (R G B A Z N.X N.Y N.Z id.block id.object) hold {lengths:?}",
             size.0, size.1
@@ -56,12 +59,14 @@ pub fn write_exr(frame: Frame, path: &Path, color: ColorType) -> Result<(), Erro
     list.push(AnyChannel::new("G", colour(g)));
     list.push(AnyChannel::new("B", colour(b)));
     list.push(AnyChannel::new("A", colour(alpha)));
-    list.push(AnyChannel::new("Z", FlatSamples::F32(depth)));
-    list.push(AnyChannel::new("N.X", FlatSamples::F32(nx)));
-    list.push(AnyChannel::new("N.Y", FlatSamples::F32(ny)));
-    list.push(AnyChannel::new("N.Z", FlatSamples::F32(nz)));
-    list.push(AnyChannel::new("id.block", FlatSamples::U32(block)));
-    list.push(AnyChannel::new("id.object", FlatSamples::U32(object)));
+    if !colour_only {
+        list.push(AnyChannel::new("Z", FlatSamples::F32(depth)));
+        list.push(AnyChannel::new("N.X", FlatSamples::F32(nx)));
+        list.push(AnyChannel::new("N.Y", FlatSamples::F32(ny)));
+        list.push(AnyChannel::new("N.Z", FlatSamples::F32(nz)));
+        list.push(AnyChannel::new("id.block", FlatSamples::U32(block)));
+        list.push(AnyChannel::new("id.object", FlatSamples::U32(object)));
+    }
     let encoding =
         Encoding { compression: Compression::ZIP16, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
     let layer = Layer::new(size, LayerAttributes::default(), encoding, AnyChannels::sort(list));

@@ -61,19 +61,26 @@ impl Frame {
     /// A frame of `width × height` pixels, every sample zero. The planes are
     /// allocated zeroed (`vec![0.0; n]`), so their pages are mapped only
     /// when first written.
-    fn zeroed(width: u32, height: u32) -> Self {
+    fn zeroed(width: u32, height: u32, aovs: bool) -> Self {
         let n = width as usize * height as usize;
         let f = || vec![0.0f32; n];
+        let a = if aovs { n } else { 0 };
         Frame {
             width,
             height,
             rgb: [f(), f(), f()],
             alpha: f(),
-            depth: f(),
-            normal: [f(), f(), f()],
-            block: vec![0; n],
-            object: vec![0; n],
+            depth: vec![0.0; a],
+            normal: [vec![0.0; a], vec![0.0; a], vec![0.0; a]],
+            block: vec![0; a],
+            object: vec![0; a],
         }
+    }
+
+    /// Whether the frame holds the AOV planes (`Z`, the normal, the ids):
+    /// always, unless rendered with [`Options::colour_only`].
+    pub fn has_aovs(&self) -> bool {
+        self.depth.len() == self.alpha.len()
     }
 
     /// The number of pixels, `width * height`.
@@ -101,9 +108,13 @@ impl Frame {
     ///
     /// If `k` is not below [`Frame::len`].
     pub fn pixel(&self, k: usize) -> Pixel {
+        let (rgb, alpha) = (self.rgb.each_ref().map(|c| c[k]), self.alpha[k]);
+        if !self.has_aovs() {
+            return Pixel { rgb, alpha, ..Pixel::default() };
+        }
         Pixel {
-            rgb: self.rgb.each_ref().map(|c| c[k]),
-            alpha: self.alpha[k],
+            rgb,
+            alpha,
             depth: self.depth[k],
             normal: self.normal.each_ref().map(|c| c[k]),
             block: self.block[k],
@@ -128,17 +139,24 @@ impl Frame {
     /// The frame cut into runs of `chunk` pixels (the last may be shorter),
     /// each writable on its own.
     fn runs_mut(&mut self, chunk: usize) -> Vec<Run<'_>> {
+        let aovs = self.has_aovs();
         let Frame { rgb: [r, g, b], alpha, depth, normal: [nx, ny, nz], block, object, .. } = self;
-        let mut f32s = [r, g, b, alpha, depth, nx, ny, nz].map(|p| p.chunks_mut(chunk));
+        let mut colour = [r, g, b, alpha].map(|p| p.chunks_mut(chunk));
+        // Without AOVs their planes are empty, and so is each run's share.
+        let mut f32s = [depth, nx, ny, nz].map(|p| p.chunks_mut(chunk));
         let mut u32s = [block, object].map(|p| p.chunks_mut(chunk));
         let mut runs = Vec::new();
         loop {
-            let next_f = f32s.each_mut().map(Iterator::next);
-            let next_u = u32s.each_mut().map(Iterator::next);
-            let (Some([r, g, b, alpha, depth, nx, ny, nz]), Some([block, object])) =
-                (transpose(next_f), transpose(next_u))
-            else {
+            let Some([r, g, b, alpha]) = transpose(colour.each_mut().map(Iterator::next)) else {
                 return runs;
+            };
+            let ([depth, nx, ny, nz], [block, object]) = if aovs {
+                match (transpose(f32s.each_mut().map(Iterator::next)), transpose(u32s.each_mut().map(Iterator::next))) {
+                    (Some(f), Some(u)) => (f, u),
+                    _ => return runs,
+                }
+            } else {
+                (Default::default(), Default::default())
             };
             runs.push(Run { rgb: [r, g, b], alpha, depth, normal: [nx, ny, nz], block, object });
         }
@@ -231,6 +249,11 @@ impl Stats {
 pub struct Options {
     /// Worker threads (default: one per core).
     pub threads: Option<usize>,
+    /// Only the colour and alpha planes: the frame's AOV planes (`Z`, the
+    /// normal, the ids) stay empty ([`Frame::has_aovs`]), for a render whose
+    /// output has none (`komplex bench`): 16 of the frame's 40 bytes a
+    /// pixel, so fewer pages to map and fill.
+    pub colour_only: bool,
 }
 
 /// The largest image rendered (2^28 pixels, about 16k × 16k): the frame
@@ -302,7 +325,7 @@ pub fn render_until(
     // (a collected list of rows would double the peak memory). Its pages are
     // first touched here, by the workers, in parallel.
     let width = world.camera.width() as usize;
-    let mut frame = Frame::zeroed(world.camera.width(), world.camera.height());
+    let mut frame = Frame::zeroed(world.camera.width(), world.camera.height(), !options.colour_only);
     let runs = frame.runs_mut(width * ROWS);
     // One shader for the frame (its material table is built once).
     let shader = Shader::new(world);

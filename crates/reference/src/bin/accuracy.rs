@@ -279,8 +279,11 @@ fn measure_renders(files: &[PathBuf], size: (u32, u32), rounds: usize) -> Vec<(S
         for _ in 0..rounds {
             for (k, p) in [Precision::Fast, Precision::Accurate, Precision::Certified].into_iter().enumerate() {
                 world.complex.set_precision(p);
-                let Ok((_, stats)) = render::frame::render(&world, render::frame::Options { threads: Some(1) }, &|| {})
-                else {
+                let Ok((_, stats)) = render::frame::render(
+                    &world,
+                    render::frame::Options { threads: Some(1), colour_only: false },
+                    &|| {},
+                ) else {
                     continue;
                 };
                 let secs = stats.elapsed.as_secs_f64();
