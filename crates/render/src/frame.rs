@@ -36,7 +36,9 @@ pub struct Pixel {
 /// allocated zeroed (its pages mapped lazily, by the worker threads that
 /// write them, not first cleared by one thread) and the EXR writer takes
 /// each channel as it is. Every plane holds `width * height` samples, as
-/// [`render`] makes them.
+/// [`render`] makes them, except that a colour-only frame
+/// ([`Options::colour_only`]) has empty AOV planes (`depth`, `normal`,
+/// `block`, `object`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     /// Width in pixels.
@@ -103,6 +105,7 @@ impl Frame {
     }
 
     /// The pixel at index `k` of the planes (row `k / width`, column `k % width`).
+    /// In a colour-only frame the AOV fields are zero (depth included).
     ///
     /// # Panics
     ///
