@@ -230,8 +230,8 @@ impl RayBoxes {
                 let b = (node.max[i][g] + f64x4::splat(self.shift_hi[i])) * inv;
                 let (a, b) = if self.inv[i] >= 0.0 { (a, b) } else { (b, a) };
                 // `if a > t0 { t0 = a }` lane by lane: NaN keeps `t0`.
-                t0 = a.cmp_gt(t0).blend(a, t0);
-                t1 = b.cmp_lt(t1).blend(b, t1);
+                t0 = greater_or_second(a, t0);
+                t1 = less_or_second(b, t1);
             }
             let slack = f64x4::splat(4.0 * f64::EPSILON) * t1.abs().max(t0.abs());
             let hit = t0.cmp_lt(f64x4::splat(f64::INFINITY)) & t0.cmp_le(t1 + slack);
@@ -239,6 +239,37 @@ impl RayBoxes {
             mask |= (hit.move_mask() as u32) << (4 * g);
         }
         (entries, mask)
+    }
+}
+
+/// `a > b ? a : b` lane by lane, so `b` where either is NaN (and where
+/// both are zeros): the slab tests' "a NaN keeps the bound". With AVX one
+/// `vmaxpd`, whose rule this is exactly (Intel's `MAX(SRC1, SRC2)`: `SRC2`
+/// for a NaN in either and for two zeros of any sign, else the greater),
+/// instead of a comparison and a blend; elsewhere those two.
+#[inline(always)]
+fn greater_or_second(a: f64x4, b: f64x4) -> f64x4 {
+    #[cfg(target_feature = "avx")]
+    {
+        a.fast_max(b)
+    }
+    #[cfg(not(target_feature = "avx"))]
+    {
+        a.cmp_gt(b).blend(a, b)
+    }
+}
+
+/// `a < b ? a : b` lane by lane: [`greater_or_second`]'s rule the other
+/// way (`vminpd` with AVX).
+#[inline(always)]
+fn less_or_second(a: f64x4, b: f64x4) -> f64x4 {
+    #[cfg(target_feature = "avx")]
+    {
+        a.fast_min(b)
+    }
+    #[cfg(not(target_feature = "avx"))]
+    {
+        a.cmp_lt(b).blend(a, b)
     }
 }
 
@@ -355,11 +386,11 @@ impl RayBoxes4 {
                 let (v0, v1) = (f64x4::splat(b.inv_min[i]), f64x4::splat(b.inv_max[i]));
                 let (p0, p1) = (p * v0, p * v1);
                 let (q0, q1) = (q * v0, q * v1);
-                let enter = p0.cmp_lt(p1).blend(p0, p1);
-                let exit = q0.cmp_gt(q1).blend(q0, q1);
+                let enter = less_or_second(p0, p1);
+                let exit = greater_or_second(q0, q1);
                 // NaN keeps the bound as it was.
-                t0 = enter.cmp_gt(t0).blend(enter, t0);
-                t1 = exit.cmp_lt(t1).blend(exit, t1);
+                t0 = greater_or_second(enter, t0);
+                t1 = less_or_second(exit, t1);
             }
             let s = f64x4::splat(16.0 * f64::EPSILON) * t0.abs().max(t1.abs());
             let culled = t0.cmp_gt(t1 + s);
@@ -385,8 +416,8 @@ impl RayBoxes4 {
             let a = (lo + self.shift_lo[i]) * self.inv[i];
             let b = (hi + self.shift_hi[i]) * self.inv[i];
             let (a, b) = (self.forward[i].blend(a, b), self.forward[i].blend(b, a));
-            t0 = a.cmp_gt(t0).blend(a, t0);
-            t1 = b.cmp_lt(t1).blend(b, t1);
+            t0 = greater_or_second(a, t0);
+            t1 = less_or_second(b, t1);
         }
         let slack = f64x4::splat(4.0 * f64::EPSILON) * t1.abs().max(t0.abs());
         let hit = t0.cmp_lt(f64x4::splat(f64::INFINITY)) & t0.cmp_le(t1 + slack);
@@ -1018,6 +1049,38 @@ mod tests {
     use quadric::nalgebra::{Point3, Vector3};
 
     use super::*;
+
+    /// The slab tests' lane-wise `a > b ? a : b` and `a < b ? a : b`
+    /// (one `vmaxpd`/`vminpd` with AVX) are bit for bit the comparison and
+    /// blend they stand for, on every pair of special values: NaN in either
+    /// operand and zeros of both signs give `b`.
+    #[test]
+    fn lane_max_and_min_keep_the_second_operand_on_nan_and_zeros() {
+        let values = [
+            f64::NAN,
+            -f64::NAN,
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            f64::MIN_POSITIVE / 2.0,
+            f64::MAX,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        let bits = |v: f64x4| v.to_array().map(f64::to_bits);
+        for chunk in values.chunks(2) {
+            for &b in &values {
+                let a = f64x4::new([chunk[0], chunk[1], b, -b]);
+                let b = f64x4::new([b, b, chunk[0], chunk[1]]);
+                assert_eq!(bits(greater_or_second(a, b)), bits(a.cmp_gt(b).blend(a, b)), "{a:?} {b:?}");
+                assert_eq!(bits(less_or_second(a, b)), bits(a.cmp_lt(b).blend(a, b)), "{a:?} {b:?}");
+            }
+        }
+        let (nan, one) = (f64x4::splat(f64::NAN), f64x4::splat(1.0));
+        assert_eq!(greater_or_second(nan, one).to_array(), [1.0; 4]);
+        assert_eq!(bits(less_or_second(f64x4::splat(0.0), f64x4::splat(-0.0))), [(-0.0f64).to_bits(); 4]);
+    }
 
     /// Rays parallel to slabs (reciprocals `±∞`): inside, on the boundary,
     /// outside on either side, along both directions of each axis.
