@@ -5,7 +5,9 @@
 # reports its trace time on stderr, `komplex bench` renders the JSON scene
 # once; the ratio is POV-Ray's trace time over ours (equal primary rays, so
 # it is the ratio of primary rays per second). Parse and load times are
-# excluded on both sides.
+# excluded on both sides. The last two columns are the rays each traced
+# (POV-Ray's rays and shadow-ray tests from its statistics, komplex's all
+# rays), so a reader can see both did the same work.
 #
 # Usage: scripts/bench-vs-povray.sh [--width W] [--height H] [--threads N] [--runs R] [--precision MODE] [SCENE...]
 # Each renderer renders each scene R times (default 3), alternating, and the
@@ -31,7 +33,7 @@ while [ $# -gt 0 ]; do
         --threads) threads="$2"; shift 2 ;;
         --runs) runs="$2"; shift 2 ;;
         --precision) precision="$2"; shift 2 ;;
-        -h|--help) sed -n '2,21p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,23p' "$0"; exit 0 ;;
         *) scenes+=("$1"); shift ;;
     esac
 done
@@ -55,8 +57,8 @@ for i in "${!scenes[@]}"; do
     esac
 done
 
-printf '%-16s %8s %10s %10s %14s %14s %14s %8s\n' \
-    scene blocks "pov s" "komplex s" "pov prim/s" "komplex prim/s" "komplex all/s" ratio
+printf '%-16s %8s %10s %10s %14s %14s %14s %8s %12s %12s\n' \
+    scene blocks "pov s" "komplex s" "pov prim/s" "komplex prim/s" "komplex all/s" ratio "pov rays" "komplex rays"
 for scene in "${scenes[@]}"; do
     name=$(basename "$scene" .json)
     "$komplex" export-pov "$scene" --width "$width" --height "$height" -o "$work/$name.pov"
@@ -66,13 +68,17 @@ for scene in "${scenes[@]}"; do
         (cd "$work" && povray -A +FN -D -P "+W$width" "+H$height" "+WT$threads" "+I$name.pov" "+O$name.png") \
             2> "$work/$name.log" >/dev/null || { cat "$work/$name.log" >&2; exit 1; }
         p=$(sed -n 's/.*Trace Time:.*(\([0-9.]*\) seconds).*/\1/p' "$work/$name.log")
-        # The data line of `komplex bench`: blocks in column 2, render seconds in 5, all rays/s in 9.
-        read -r blocks o a < <("$komplex" bench "$scene" --width "$width" --height "$height" --threads "$threads" \
-            --precision "$precision" | awk 'NR == 2 { print $2, $5, $9 }')
+        # POV-Ray's rays (camera, reflected, refracted, transmitted) and
+        # shadow-ray tests, which together are what komplex counts as all rays.
+        pr=$(awk '/^Rays:/ { r = $2 } /^Shadow Ray Tests:/ { s = $4 } END { print r + s }' "$work/$name.log")
+        # The data line of `komplex bench`: blocks in column 2, render seconds in 5, all rays in 7, all rays/s in 9.
+        read -r blocks o kr a < <("$komplex" bench "$scene" --width "$width" --height "$height" --threads "$threads" \
+            --precision "$precision" | awk 'NR == 2 { print $2, $5, $7, $9 }')
         if [ -z "$pov" ] || awk -v x="$p" -v y="$pov" 'BEGIN { exit !(x < y) }'; then pov=$p; fi
         if [ -z "$ours" ] || awk -v x="$o" -v y="$ours" 'BEGIN { exit !(x < y) }'; then ours=$o all=$a; fi
     done
-    awk -v n="$name" -v b="$blocks" -v p="$pov" -v o="$ours" -v a="$all" -v px=$((width * height)) 'BEGIN { if (p <= 0) p = 0.001
-        printf "%-16s %8d %10.3f %10.3f %14.0f %14.0f %14.0f %8.2f\n", n, b, p, o, px / p, px / o, a, p / o }'
+    awk -v n="$name" -v b="$blocks" -v p="$pov" -v o="$ours" -v a="$all" -v pr="$pr" -v kr="$kr" -v px=$((width * height)) 'BEGIN { if (p <= 0) p = 0.001
+        printf "%-16s %8d %10.3f %10.3f %14.0f %14.0f %14.0f %8.2f %12d %12d\n", n, b, p, o, px / p, px / o, a, p / o, pr, kr }'
 done
-echo "($width x $height, $threads thread(s), komplex --precision $precision, fastest of $runs runs each; ratio = POV-Ray trace time / komplex render time, > 1: komplex is faster)"
+echo "($width x $height, $threads thread(s), komplex --precision $precision, fastest of $runs runs each; ratio = POV-Ray trace time / komplex render time, > 1: komplex is faster;"
+echo " rays: POV-Ray's rays plus its shadow-ray tests, and komplex's camera, shadow and secondary rays, per render: the work each did)"

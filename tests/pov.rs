@@ -211,3 +211,56 @@ fn exported_solids_contain_the_same_points() {
         assert!(inside * 10 >= compared, "{}: only {inside} of {compared} samples inside", scene.display());
     }
 }
+
+/// `scripts/bench-vs-povray.sh` end to end on two scenes at a small size:
+/// each ratio is POV-Ray's time over ours as printed (to the rounding of
+/// the printed seconds), our ray count is `komplex bench`'s, and POV-Ray's
+/// rays and shadow tests are of the same order as ours — an export that
+/// traced deeper, dropped a light or shadows, or a script reading the
+/// wrong column of either log would break it.
+#[test]
+fn bench_script_compares_the_same_work() {
+    if !have_povray() {
+        return;
+    }
+    let root = crate::support::root();
+    let scenes = [root.join("scenes/table.json"), root.join("scenes/bench/sphereflake-3.json")];
+    let out = Command::new("bash")
+        .arg(root.join("scripts/bench-vs-povray.sh"))
+        .args(["--width", "160", "--height", "120", "--runs", "1"])
+        .args(&scenes)
+        .env("KOMPLEX", env!("CARGO_BIN_EXE_komplex"))
+        .output()
+        .expect("bash runs");
+    let printed = text(&out);
+    assert!(out.status.success(), "{printed}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let rows: Vec<Vec<&str>> = stdout
+        .lines()
+        .map(|l| l.split_whitespace().collect::<Vec<_>>())
+        .filter(|f| f.len() > 1 && f[1].parse::<u64>().is_ok())
+        .collect();
+    assert_eq!(rows.len(), 2, "{printed}");
+    let dir = tempdir();
+    for (row, scene) in rows.iter().zip(&scenes) {
+        // scene, blocks, pov s, komplex s, pov prim/s, komplex prim/s, komplex all/s, ratio, pov rays, komplex rays
+        assert_eq!(row.len(), 10, "{printed}");
+        assert_eq!(row[0], scene.file_stem().unwrap().to_str().unwrap());
+        let num = |i: usize| -> f64 { row[i].parse().unwrap_or_else(|_| panic!("column {i} of {row:?}")) };
+        let (pov, ours, ratio) = (num(2), num(3), num(7));
+        // Seconds are printed to the millisecond, the ratio from the unrounded times.
+        let (lo, hi) = ((pov - 5e-4) / (ours + 5e-4), (pov + 5e-4) / (ours - 5e-4).max(1e-9));
+        assert!(lo - 0.005 <= ratio && ratio <= hi + 0.005, "ratio {ratio} outside [{lo}, {hi}]: {row:?}");
+        assert!((num(4) - 160.0 * 120.0 / pov).abs() <= 0.01 * num(4) + 1.0, "{row:?}");
+        let bench = komplex_ok(
+            dir.path(),
+            &["bench", scene.to_str().unwrap(), "--width", "160", "--height", "120", "--threads", "1"],
+        );
+        let bench = String::from_utf8(bench.stdout).unwrap();
+        let all_rays = bench.lines().nth(1).unwrap().split_whitespace().nth(6).unwrap();
+        assert_eq!(row[9], all_rays, "komplex rays are bench's all rays: {bench}");
+        let (theirs, ours) = (num(8), num(9));
+        assert!(ours >= 160.0 * 120.0, "{row:?}");
+        assert!(theirs >= 0.5 * ours && theirs <= 2.0 * ours, "POV-Ray traced {theirs} rays, komplex {ours}: {row:?}");
+    }
+}
