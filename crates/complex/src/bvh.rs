@@ -233,7 +233,9 @@ impl RayBoxes {
                 t0 = greater_or_second(a, t0);
                 t1 = less_or_second(b, t1);
             }
-            let slack = f64x4::splat(4.0 * f64::EPSILON) * t1.abs().max(t0.abs());
+            // `t0` and `t1` are never NaN (the caller's bounds are not, and
+            // the updates keep a NaN out), so this is the plain lane maximum.
+            let slack = f64x4::splat(4.0 * f64::EPSILON) * greater_or_second(t1.abs(), t0.abs());
             let hit = t0.cmp_lt(f64x4::splat(f64::INFINITY)) & t0.cmp_le(t1 + slack);
             *entry = t0 - slack;
             mask |= (hit.move_mask() as u32) << (4 * g);
@@ -392,7 +394,8 @@ impl RayBoxes4 {
                 t0 = greater_or_second(enter, t0);
                 t1 = less_or_second(exit, t1);
             }
-            let s = f64x4::splat(16.0 * f64::EPSILON) * t0.abs().max(t1.abs());
+            // Never NaN, as in `enter_node`: the plain lane maximum.
+            let s = f64x4::splat(16.0 * f64::EPSILON) * greater_or_second(t0.abs(), t1.abs());
             let culled = t0.cmp_gt(t1 + s);
             mask |= (!(culled.move_mask() as u32) & 0b1111) << (4 * g);
         }
@@ -419,7 +422,8 @@ impl RayBoxes4 {
             t0 = greater_or_second(a, t0);
             t1 = less_or_second(b, t1);
         }
-        let slack = f64x4::splat(4.0 * f64::EPSILON) * t1.abs().max(t0.abs());
+        // Never NaN, as in `RayBoxes::enter_node`: the plain lane maximum.
+        let slack = f64x4::splat(4.0 * f64::EPSILON) * greater_or_second(t1.abs(), t0.abs());
         let hit = t0.cmp_lt(f64x4::splat(f64::INFINITY)) & t0.cmp_le(t1 + slack);
         (t0 - slack, hit.move_mask() as u32)
     }
