@@ -222,6 +222,12 @@ impl RayBoxes {
         let mut entries = [f64x4::ZERO; H];
         let mut mask = 0;
         for (g, entry) in entries.iter_mut().enumerate() {
+            // Lanes are filled from the first: a group whose first lane is
+            // unused is empty (most nodes near the leaves of an eight-wide
+            // tree have four children or fewer).
+            if g > 0 && !node.used(4 * g) {
+                break;
+            }
             let (mut t0, mut t1) = (f64x4::splat(t_min), f64x4::splat(t_max));
             for i in 0..3 {
                 // Broadcast loads: cheaper than keeping four-lane copies per ray.
@@ -742,11 +748,18 @@ impl<const W: usize, const H: usize> Tree<W, H> {
                 // about what the cull would: each is tested.
                 (0..W).for_each(child);
             } else {
+                // The lanes are filled from the first, so the first unused
+                // one ends the children. (The cull keeps unused lanes, see
+                // there; most nodes near the leaves of an eight-wide tree
+                // have four children or fewer.)
                 let reach = (0..4).filter(|l| lanes & (1 << l) != 0).fold(f64::NEG_INFINITY, |m, l| m.max(t_max[l]));
                 let mut maybe = RayBoxes4::cull(&bounds, node, t_min, reach);
                 while maybe != 0 {
                     let c = maybe.trailing_zeros() as usize;
                     maybe &= maybe - 1;
+                    if !node.used(c) {
+                        break;
+                    }
                     child(c);
                 }
             }
@@ -812,6 +825,15 @@ impl<const W: usize, const H: usize> Wide<W, H> {
     #[inline(always)]
     fn entry(&self, lane: usize) -> u64 {
         u64::from(self.child[lane]) | u64::from(self.count[lane]) << 32
+    }
+
+    /// Whether `lane` holds a child. The collapse fills lanes from the
+    /// first, so the first unused lane ends the children. An unused lane
+    /// has child 0 and count 0: node 0 is the root, no node's child, and a
+    /// leaf has at least one block.
+    #[inline(always)]
+    fn used(&self, lane: usize) -> bool {
+        self.child[lane] | self.count[lane] != 0
     }
 
     const EMPTY: Self = Wide {
@@ -1129,7 +1151,8 @@ mod tests {
     }
 
     /// [`RayBoxes::enter_node`] for a node whose lane `lane` holds the box
-    /// (the other lanes empty, which must never be entered).
+    /// (the other lanes empty, which must never be entered; those before
+    /// it hold children, as the collapse fills lanes from the first).
     fn lane0<const W: usize, const H: usize>(
         rb: &RayBoxes,
         min: &[f64; 3],
@@ -1140,6 +1163,7 @@ mod tests {
     ) -> Option<f64> {
         let mut node = Wide::<W, H>::EMPTY;
         node.set_box(lane, min, max);
+        node.count[..=lane].fill(1);
         let (entry, hits) = rb.enter_node(&node, t_min, t_max);
         assert_eq!(hits & !(1 << lane), 0, "an empty lane was entered");
         (hits & (1 << lane) != 0).then(|| entry[lane / 4].to_array()[lane % 4])
@@ -1360,6 +1384,7 @@ mod tests {
         #[test]
         fn tree_visits_what_brute_force_does(
             boxes in prop::collection::vec(boxed(), 1..60), ray in ray(), p in [coord(), coord(), coord()], eight: bool,
+            others in [ray(), ray(), ray()],
             open in prop_oneof![Just(None), Just(Some(Open::Shallowest)), Just(Some(Open::Largest))],
         ) {
             let entries: Vec<(u32, Aabb)> = boxes
@@ -1379,7 +1404,30 @@ mod tests {
                 .collect();
             // Inner boxes hold their children, so nothing is culled early;
             // a leaf is visited once.
-            prop_assert_eq!(seen, expected);
+            prop_assert_eq!(&seen, &expected);
+            // The any-hit walk visits the same blocks in its own order.
+            let mut any = Vec::new();
+            let mut t_max = f64::INFINITY;
+            bvh.traverse_any(&rb, 0.0, &mut t_max, |k, _, _| any.push(bvh.items()[k as usize]));
+            any.sort_unstable();
+            prop_assert_eq!(&any, &expected);
+            // So does each lane of a packet walk (of this ray and three
+            // others), through the eight-wide tree's cull and nodes with
+            // unused lanes.
+            let rays = [ray, others[0], others[1], others[2]];
+            let rbs = rays.map(|r| RayBoxes::new(&r));
+            let mut lanes = vec![Vec::new(); 4];
+            let mut t_max = [f64::INFINITY; 4];
+            bvh.traverse4(&RayBoxes4::new(&rbs), 0b1111, 0.0, &mut t_max, |k, lane, _| {
+                lanes[lane].push(bvh.items()[k as usize])
+            });
+            for (lane, rb) in rbs.iter().enumerate() {
+                lanes[lane].sort_unstable();
+                let expected: Vec<u32> = (0..boxes.len() as u32)
+                    .filter(|&i| rb.enter(&boxes[i as usize].0, &boxes[i as usize].1, 0.0, f64::INFINITY).is_some())
+                    .collect();
+                prop_assert_eq!(&lanes[lane], &expected, "lane {}", lane);
+            }
             let mut inside = Vec::new();
             bvh.visit_point(&p, |i| inside.push(i));
             inside.sort_unstable();
