@@ -1,8 +1,8 @@
 //! A bounding-volume hierarchy over the bounded blocks.
 //!
 //! Built once with the surface-area heuristic over binned centroids into a
-//! binary tree, then collapsed into a tree of four-wide nodes (two ways,
-//! the tree of lower surface-area cost kept: see [`Open`]): a node holds
+//! binary tree, then collapsed into a tree of four-wide nodes (the
+//! collapse of least surface-area cost: see [`Open::Cheapest`]): a node holds
 //! the boxes of its (up to) four children lane by lane, so one step tests all
 //! four with a few `f64x4` operations (the `wide` crate: AVX where the
 //! target has it, plain arrays elsewhere) and reads 256 bytes from four
@@ -33,7 +33,7 @@ const PARALLEL_FROM: usize = 4096;
 /// subtree could get deeper than this.
 const MAX_DEPTH: usize = 64;
 /// Traversal stack size: the wide tree is at most `MAX_DEPTH / 2` deep
-/// (see [`Tree::collapse`]), and a step takes one entry and leaves at most
+/// (see [`Tree::collapse`] and [`Costs`]), and a step takes one entry and leaves at most
 /// eight (`walk` keeps one of them aside as the next, which only lowers the
 /// count), so the stack holds at most `7 · depth + 1` entries.
 const STACK: usize = 7 * MAX_DEPTH.div_ceil(2) + 1;
@@ -122,6 +122,11 @@ enum Open {
     /// The one with the largest box, which a ray most likely enters: best
     /// where sizes vary (a sphereflake's spheres shrink threefold a level).
     Largest,
+    /// Not one at a time: the collapse of least surface-area cost among all
+    /// that open each wide node's own two binary children, found by dynamic
+    /// programming over the binary tree ([`Tree::cheapest`]). Never dearer
+    /// than the other two.
+    Cheapest,
 }
 
 /// The hierarchy: wide nodes and the block indices the leaves point into.
@@ -540,8 +545,8 @@ impl Bvh {
 
 impl<const W: usize, const H: usize> Tree<W, H> {
     /// The wide tree of a binary one (root: node 0, not empty), collapsed
-    /// by `open`, or (`None`) both ways [`Open`] offers, keeping the one of
-    /// lower surface-area cost ([`Open::Shallowest`] on a tie).
+    /// by `open` (`None`: [`Open::Cheapest`]; with debug assertions, checked
+    /// to cost no more than the other two rules).
     fn from_binary(binary: &[Node], open: Option<Open>) -> Self {
         const { assert!(W == 4 * H && W <= 8) };
         let root = &binary[0];
@@ -553,16 +558,14 @@ impl<const W: usize, const H: usize> Tree<W, H> {
             node.count[0] = root.count;
             return Tree { nodes: vec![node] };
         }
-        if let Some(open) = open {
-            return Self::collapsed(binary, open).0;
+        let (tree, cost) = Self::collapsed(binary, open.unwrap_or(Open::Cheapest));
+        if cfg!(debug_assertions) && open.is_none() {
+            for rule in [Open::Shallowest, Open::Largest] {
+                let other = Self::collapsed(binary, rule).1;
+                debug_assert!(cost <= other * (1.0 + 1e-12), "{rule:?} costs {other}, the cheapest {cost}");
+            }
         }
-        let ((shallow, shallow_cost), (large, large_cost)) =
-            rayon::join(|| Self::collapsed(binary, Open::Shallowest), || Self::collapsed(binary, Open::Largest));
-        if large_cost < shallow_cost {
-            large
-        } else {
-            shallow
-        }
+        tree
     }
 
     /// The wide tree of a binary one whose root is an inner node, opened by
@@ -571,8 +574,41 @@ impl<const W: usize, const H: usize> Tree<W, H> {
     fn collapsed(binary: &[Node], open: Open) -> (Self, f64) {
         let mut tree = Tree { nodes: Vec::with_capacity(binary.len() / (W - 1) + 1) };
         let mut cost = 0.0;
-        tree.collapse(binary, 0, open, &mut cost);
+        if let Open::Cheapest = open {
+            let costs = Costs::<W>::new(binary);
+            tree.cheapest(binary, &costs, 0, &mut cost);
+        } else {
+            tree.collapse(binary, 0, open, &mut cost);
+        }
         (tree, cost)
+    }
+
+    /// Appends the wide node for the binary inner node `x` as `costs` chose
+    /// it, then those of its inner lanes; returns its index and adds the
+    /// half-areas of the nodes it makes to `cost`, as [`Tree::collapse`]
+    /// does.
+    fn cheapest(&mut self, nodes: &[Node], costs: &Costs<W>, x: usize, cost: &mut f64) -> u32 {
+        *cost += half_area(&nodes[x].min, &nodes[x].max);
+        let first = nodes[x].start as usize;
+        let j = usize::from(costs.node_split[x]);
+        let mut children = ArrayVec::<usize, W>::new();
+        costs.take_opened(nodes, first, j, &mut children);
+        costs.take_opened(nodes, first + 1, W - j, &mut children);
+        let me = self.nodes.len();
+        self.nodes.push(Wide::EMPTY);
+        let mut node = Wide::EMPTY;
+        for (lane, &c) in children.iter().enumerate() {
+            let k = &nodes[c];
+            node.set_box(lane, &k.min, &k.max);
+            if k.count > 0 {
+                node.child[lane] = k.start;
+                node.count[lane] = k.count;
+            } else {
+                node.child[lane] = self.cheapest(nodes, costs, c, cost);
+            }
+        }
+        self.nodes[me] = node;
+        me as u32
     }
 
     /// Appends the wide node for the binary inner node `n`, then those of
@@ -601,6 +637,8 @@ impl<const W: usize, const H: usize> Tree<W, H> {
                     })
                     .reduce(|a, b| if (b.1, b.2) > (a.1, a.2) { b } else { a })
                     .map(|(j, _, _)| j),
+                // `Tree::collapsed` builds this one with `Tree::cheapest`.
+                Open::Cheapest => unreachable!("the cheapest collapse is not made one node at a time"),
             };
             let Some(j) = pick else { break };
             let (c, d) = children.remove(j);
@@ -812,6 +850,102 @@ impl<const W: usize, const H: usize> Tree<W, H> {
                 } else {
                     stack.push(child);
                 }
+            }
+        }
+    }
+}
+
+/// The least costs of [`Open::Cheapest`], for every binary node `x`
+/// (children follow their parent in the binary tree, so one pass from the
+/// last node to the first has each node's children done before it):
+///
+/// - `node[x]`: `x` as a wide node: the half-area of its box plus the least
+///   cost of its two children's subtrees, both opened (unless leaves),
+///   sharing `W` lanes (`node_split[x]` of them to the first child);
+/// - `opened[x][k - 1]`: `x`'s subtree in at most `k` lanes with `x` opened:
+///   0 for a leaf (one lane), else the least sum, over the ways to share
+///   the `k` lanes (`opened_split[x][k - 1]` to the first child), of its
+///   children's subtrees in their lanes, each as cheap as it can be: the
+///   child as one lane (a leaf, free; an inner node, `node`), or opened.
+///
+/// A lane is thus always at least two binary levels below its wide node,
+/// as with the other rules (see `STACK`). Costs are summed in one order
+/// whatever the rule, so on a tie the choice is the first found: the child
+/// as one lane before opening it, fewer lanes to the first child first.
+struct Costs<const W: usize> {
+    node: Vec<f64>,
+    node_split: Vec<u8>,
+    opened: Vec<[f64; W]>,
+    opened_split: Vec<[u8; W]>,
+}
+
+impl<const W: usize> Costs<W> {
+    fn new(nodes: &[Node]) -> Self {
+        let n = nodes.len();
+        let mut c = Costs {
+            node: vec![f64::INFINITY; n],
+            node_split: vec![0; n],
+            opened: vec![[f64::INFINITY; W]; n],
+            opened_split: vec![[0; W]; n],
+        };
+        for x in (0..n).rev() {
+            if nodes[x].count > 0 {
+                c.opened[x] = [0.0; W];
+                continue;
+            }
+            let (l, r) = (nodes[x].start as usize, nodes[x].start as usize + 1);
+            for k in 2..=W {
+                let mut best = (f64::INFINITY, 0);
+                for j in 1..k {
+                    let sum = c.lanes(nodes, l, j) + c.lanes(nodes, r, k - j);
+                    if sum < best.0 {
+                        best = (sum, j);
+                    }
+                }
+                c.opened[x][k - 1] = best.0;
+                c.opened_split[x][k - 1] = best.1 as u8;
+            }
+            let mut best = (f64::INFINITY, 0);
+            for j in 1..W {
+                let sum = c.opened[l][j - 1] + c.opened[r][W - j - 1];
+                if sum < best.0 {
+                    best = (sum, j);
+                }
+            }
+            c.node[x] = half_area(&nodes[x].min, &nodes[x].max) + best.0;
+            c.node_split[x] = best.1 as u8;
+        }
+        c
+    }
+
+    /// Whether `x`, given `k` lanes, stays one lane (a leaf, or a wide node
+    /// of its own) rather than being opened.
+    fn one_lane(&self, nodes: &[Node], x: usize, k: usize) -> bool {
+        nodes[x].count > 0 || self.node[x] <= self.opened[x][k - 1]
+    }
+
+    /// The least cost of `x`'s subtree in at most `k` lanes.
+    fn lanes(&self, nodes: &[Node], x: usize, k: usize) -> f64 {
+        if nodes[x].count > 0 {
+            0.0
+        } else {
+            self.node[x].min(self.opened[x][k - 1])
+        }
+    }
+
+    /// Appends the lanes of `x`'s subtree in at most `k` lanes, `x` opened.
+    fn take_opened(&self, nodes: &[Node], x: usize, k: usize, out: &mut ArrayVec<usize, W>) {
+        if nodes[x].count > 0 {
+            out.push(x);
+            return;
+        }
+        let j = usize::from(self.opened_split[x][k - 1]);
+        let first = nodes[x].start as usize;
+        for (c, k) in [(first, j), (first + 1, k - j)] {
+            if self.one_lane(nodes, c, k) {
+                out.push(c);
+            } else {
+                self.take_opened(nodes, c, k, out);
             }
         }
     }
@@ -1391,6 +1525,31 @@ mod tests {
         /// blocks whose own boxes the ray enters (no early exit), and
         /// `visit_point` exactly those whose boxes hold the point.
         #[test]
+        fn cheapest_collapse_is_the_least_of_all(boxes in prop::collection::vec(boxed(), 2..12)) {
+            let entries: Vec<(u32, Aabb)> = boxes
+                .iter()
+                .enumerate()
+                .map(|(i, (lo, hi))| (i as u32, Aabb { min: Point3::from(*lo), max: Point3::from(*hi) }))
+                .collect();
+            let binary = binary_of(&entries);
+            prop_assume!(binary[0].count == 0);
+            for w in [4, 8] {
+                let want = brute_cost(&binary, 0, w);
+                let (got, other) = if w == 4 {
+                    let (t, cost) = Tree::<4, 1>::collapsed(&binary, Open::Cheapest);
+                    prop_assert!((tree_cost(&t) - cost).abs() <= 1e-9 * cost);
+                    (cost, Tree::<4, 1>::collapsed(&binary, Open::Shallowest).1)
+                } else {
+                    let (t, cost) = Tree::<8, 2>::collapsed(&binary, Open::Cheapest);
+                    prop_assert!((tree_cost(&t) - cost).abs() <= 1e-9 * cost);
+                    (cost, Tree::<8, 2>::collapsed(&binary, Open::Largest).1)
+                };
+                prop_assert!((got - want).abs() <= 1e-9 * want, "{}-wide: {} but the least is {}", w, got, want);
+                prop_assert!(got <= other * (1.0 + 1e-12));
+            }
+        }
+
+        #[test]
         fn tree_visits_what_brute_force_does(
             boxes in prop::collection::vec(boxed(), 1..60), ray in ray(), p in [coord(), coord(), coord()], eight: bool,
             others in [ray(), ray(), ray()],
@@ -1526,10 +1685,69 @@ mod tests {
             let (best, other) = match cheaper {
                 Open::Shallowest => (shallow, large),
                 Open::Largest => (large, shallow),
+                Open::Cheapest => unreachable!(),
             };
             assert!(tree_cost(&best) < tree_cost(&other), "{cheaper:?} is not the cheaper rule here");
-            same_tree(&chosen, &best);
+            // The build's collapse costs less than either rule's on both.
+            assert!(tree_cost(&chosen) < tree_cost(&best), "{} against {}", tree_cost(&chosen), tree_cost(&best));
+            let Nodes::Eight(cheapest) = Bvh::build_with(entries, PARALLEL_FROM, true, Some(Open::Cheapest)).nodes
+            else {
+                panic!("not eight-wide");
+            };
+            same_tree(&chosen, &cheapest);
         }
+    }
+
+    /// The binary tree `Bvh::build_with` collapses.
+    fn binary_of(entries: &[(u32, Aabb)]) -> Vec<Node> {
+        let mut work: Vec<Entry> = entries
+            .iter()
+            .map(|(i, b)| Entry {
+                index: *i,
+                min: b.min.coords.into(),
+                max: b.max.coords.into(),
+                centre: (0.5 * (b.min.coords + b.max.coords)).into(),
+            })
+            .collect();
+        let mut binary = Binary { nodes: vec![EMPTY_NODE], items: Vec::new() };
+        binary.build_node(0, &mut work, 0, PARALLEL_FROM);
+        binary.nodes
+    }
+
+    /// Every set of lanes `x`'s subtree can give a wide node above it: `x`
+    /// itself (if `may_be_lane`, or a leaf), or one of its first child's
+    /// sets beside one of its second's, at most `w` lanes in all.
+    fn cuts(nodes: &[Node], x: usize, may_be_lane: bool, w: usize) -> Vec<Vec<usize>> {
+        if nodes[x].count > 0 {
+            return vec![vec![x]];
+        }
+        let mut all = if may_be_lane { vec![vec![x]] } else { vec![] };
+        let first = nodes[x].start as usize;
+        for a in cuts(nodes, first, true, w) {
+            for b in cuts(nodes, first + 1, true, w) {
+                if a.len() + b.len() <= w {
+                    all.push([a.clone(), b].concat());
+                }
+            }
+        }
+        all
+    }
+
+    /// The least cost of the wide node for `x` and everything below it, by
+    /// trying every set of lanes (its own two children opened).
+    fn brute_cost(nodes: &[Node], x: usize, w: usize) -> f64 {
+        let first = nodes[x].start as usize;
+        let mut best = f64::INFINITY;
+        for a in cuts(nodes, first, false, w) {
+            for b in cuts(nodes, first + 1, false, w) {
+                if a.len() + b.len() <= w {
+                    let below: f64 =
+                        a.iter().chain(&b).filter(|&&c| nodes[c].count == 0).map(|&c| brute_cost(nodes, c, w)).sum();
+                    best = best.min(below);
+                }
+            }
+        }
+        half_area(&nodes[x].min, &nodes[x].max) + best
     }
 
     /// The sum of the half-areas of a tree's node boxes (the union of each
