@@ -124,7 +124,7 @@ enum Open {
     Largest,
     /// Not one at a time: the collapse of least surface-area cost among all
     /// that open each wide node's own two binary children, found by dynamic
-    /// programming over the binary tree ([`Tree::cheapest`]). Never dearer
+    /// programming over the binary tree ([`Costs`]). Never dearer
     /// than the other two.
     Cheapest,
 }
@@ -576,39 +576,11 @@ impl<const W: usize, const H: usize> Tree<W, H> {
         let mut cost = 0.0;
         if let Open::Cheapest = open {
             let costs = Costs::<W>::new(binary);
-            tree.cheapest(binary, &costs, 0, &mut cost);
+            tree.collapse(binary, 0, &|x| costs.children(binary, x), &mut cost);
         } else {
-            tree.collapse(binary, 0, open, &mut cost);
+            tree.collapse(binary, 0, &|n| greedy_children(binary, n, open), &mut cost);
         }
         (tree, cost)
-    }
-
-    /// Appends the wide node for the binary inner node `x` as `costs` chose
-    /// it, then those of its inner lanes; returns its index and adds the
-    /// half-areas of the nodes it makes to `cost`, as [`Tree::collapse`]
-    /// does.
-    fn cheapest(&mut self, nodes: &[Node], costs: &Costs<W>, x: usize, cost: &mut f64) -> u32 {
-        *cost += half_area(&nodes[x].min, &nodes[x].max);
-        let first = nodes[x].start as usize;
-        let j = usize::from(costs.node_split[x]);
-        let mut children = ArrayVec::<usize, W>::new();
-        costs.take_opened(nodes, first, j, &mut children);
-        costs.take_opened(nodes, first + 1, W - j, &mut children);
-        let me = self.nodes.len();
-        self.nodes.push(Wide::EMPTY);
-        let mut node = Wide::EMPTY;
-        for (lane, &c) in children.iter().enumerate() {
-            let k = &nodes[c];
-            node.set_box(lane, &k.min, &k.max);
-            if k.count > 0 {
-                node.child[lane] = k.start;
-                node.count[lane] = k.count;
-            } else {
-                node.child[lane] = self.cheapest(nodes, costs, c, cost);
-            }
-        }
-        self.nodes[me] = node;
-        me as u32
     }
 
     /// Appends the wide node for the binary inner node `n`, then those of
@@ -616,46 +588,30 @@ impl<const W: usize, const H: usize> Tree<W, H> {
     /// half-areas of the boxes of the nodes it makes (a ray crosses a box
     /// about in proportion to its area: their sum over the root's is the
     /// number of node steps a random ray takes, the surface-area heuristic
-    /// of the wide tree). Its children are `n`'s descendants found by
-    /// opening inner children as `open` picks until there are `W`, or only
-    /// leaves; `n`'s own two children first, whichever the rule: so every
+    /// of the wide tree). Its children, at most `W`, are the binary nodes
+    /// `children(n)` picks below `n` (by a greedy rule, or as [`Costs`]
+    /// chose them); `n`'s own two children are always opened: so every
     /// inner child is at least two binary levels below `n`, and the wide
     /// tree is at most `MAX_DEPTH / 2` deep (see `STACK`).
-    fn collapse(&mut self, nodes: &[Node], n: usize, open: Open, cost: &mut f64) -> u32 {
+    fn collapse(
+        &mut self,
+        nodes: &[Node],
+        n: usize,
+        children: &impl Fn(usize) -> ArrayVec<usize, W>,
+        cost: &mut f64,
+    ) -> u32 {
         *cost += half_area(&nodes[n].min, &nodes[n].max);
-        let first = nodes[n].start as usize;
-        // `(node, binary depth below n)`.
-        let mut children = ArrayVec::<_, W>::from_iter([(first, 1), (first + 1, 1)]);
-        while children.len() < W {
-            let inner = (0..children.len()).filter(|&j| nodes[children[j].0].count == 0);
-            let pick = match open {
-                Open::Shallowest => inner.min_by_key(|&j| children[j].1),
-                Open::Largest => inner
-                    .map(|j| {
-                        let k = &nodes[children[j].0];
-                        (j, children[j].1 == 1, half_area(&k.min, &k.max))
-                    })
-                    .reduce(|a, b| if (b.1, b.2) > (a.1, a.2) { b } else { a })
-                    .map(|(j, _, _)| j),
-                // `Tree::collapsed` builds this one with `Tree::cheapest`.
-                Open::Cheapest => unreachable!("the cheapest collapse is not made one node at a time"),
-            };
-            let Some(j) = pick else { break };
-            let (c, d) = children.remove(j);
-            let c = nodes[c].start as usize;
-            children.extend([(c, d + 1), (c + 1, d + 1)]);
-        }
         let me = self.nodes.len();
         self.nodes.push(Wide::EMPTY);
         let mut node = Wide::EMPTY;
-        for (lane, &(c, _)) in children.iter().enumerate() {
+        for (lane, c) in children(n).into_iter().enumerate() {
             let k = &nodes[c];
             node.set_box(lane, &k.min, &k.max);
             if k.count > 0 {
                 node.child[lane] = k.start;
                 node.count[lane] = k.count;
             } else {
-                node.child[lane] = self.collapse(nodes, c, open, cost);
+                node.child[lane] = self.collapse(nodes, c, children, cost);
             }
         }
         self.nodes[me] = node;
@@ -855,6 +811,35 @@ impl<const W: usize, const H: usize> Tree<W, H> {
     }
 }
 
+/// The children of the wide node for the binary inner node `n` by a greedy
+/// rule: `n`'s own two, then inner ones opened as `open` picks until there
+/// are `W`, or only leaves.
+fn greedy_children<const W: usize>(nodes: &[Node], n: usize, open: Open) -> ArrayVec<usize, W> {
+    let first = nodes[n].start as usize;
+    // `(node, binary depth below n)`.
+    let mut children = ArrayVec::<_, W>::from_iter([(first, 1), (first + 1, 1)]);
+    while children.len() < W {
+        let inner = (0..children.len()).filter(|&j| nodes[children[j].0].count == 0);
+        let pick = match open {
+            Open::Shallowest => inner.min_by_key(|&j| children[j].1),
+            Open::Largest => inner
+                .map(|j| {
+                    let k = &nodes[children[j].0];
+                    (j, children[j].1 == 1, half_area(&k.min, &k.max))
+                })
+                .reduce(|a, b| if (b.1, b.2) > (a.1, a.2) { b } else { a })
+                .map(|(j, _, _)| j),
+            // `Tree::collapsed` takes this one's children from `Costs`.
+            Open::Cheapest => unreachable!("the cheapest collapse is not greedy"),
+        };
+        let Some(j) = pick else { break };
+        let (c, d) = children.remove(j);
+        let c = nodes[c].start as usize;
+        children.extend([(c, d + 1), (c + 1, d + 1)]);
+    }
+    children.into_iter().map(|(c, _)| c).collect()
+}
+
 /// The least costs of [`Open::Cheapest`], for every binary node `x`
 /// (children follow their parent in the binary tree, so one pass from the
 /// last node to the first has each node's children done before it):
@@ -931,6 +916,17 @@ impl<const W: usize> Costs<W> {
         } else {
             self.node[x].min(self.opened[x][k - 1])
         }
+    }
+
+    /// The children of the wide node for the binary inner node `x`: its own
+    /// two opened, sharing the `W` lanes as `node_split` chose.
+    fn children(&self, nodes: &[Node], x: usize) -> ArrayVec<usize, W> {
+        let first = nodes[x].start as usize;
+        let j = usize::from(self.node_split[x]);
+        let mut out = ArrayVec::new();
+        self.take_opened(nodes, first, j, &mut out);
+        self.take_opened(nodes, first + 1, W - j, &mut out);
+        out
     }
 
     /// Appends the lanes of `x`'s subtree in at most `k` lanes, `x` opened.
