@@ -600,7 +600,7 @@ impl<const W: usize, const H: usize> Tree<W, H> {
         children: &impl Fn(usize) -> ArrayVec<usize, W>,
         cost: &mut f64,
     ) -> u32 {
-        *cost += half_area(&nodes[n].min, &nodes[n].max);
+        *cost += step_cost(&nodes[n]);
         let me = self.nodes.len();
         self.nodes.push(Wide::EMPTY);
         let mut node = Wide::EMPTY;
@@ -897,7 +897,7 @@ impl<const W: usize> Costs<W> {
                     best = (sum, j);
                 }
             }
-            c.node[x] = half_area(&nodes[x].min, &nodes[x].max) + best.0;
+            c.node[x] = step_cost(&nodes[x]) + best.0;
             c.node_split[x] = best.1 as u8;
         }
         c
@@ -1089,6 +1089,23 @@ fn span(work: &[Entry], corners: impl Fn(&Entry) -> (&[f64; 3], &[f64; 3])) -> (
     }
     (min, max)
 }
+
+/// What a wide node with `node`'s box costs a walk in [`Tree::collapse`]:
+/// its half-area, at most [`MAX_STEP_COST`] (so also where it overflows,
+/// or is NaN: a flat box infinite along another axis). Sums of these over
+/// a tree stay finite and are never NaN, so ∞ in [`Costs`] means only "no
+/// way to do it" (an inner node opened into a single lane).
+fn step_cost(node: &Node) -> f64 {
+    let a = half_area(&node.min, &node.max);
+    if a <= MAX_STEP_COST {
+        a
+    } else {
+        MAX_STEP_COST
+    }
+}
+
+/// See [`step_cost`]: a tree of up to 10¹⁸ nodes sums to under `f64::MAX`.
+const MAX_STEP_COST: f64 = 1e290;
 
 fn half_area(min: &[f64; 3], max: &[f64; 3]) -> f64 {
     let d = [max[0] - min[0], max[1] - min[1], max[2] - min[2]];
@@ -1365,6 +1382,25 @@ mod tests {
             })
     }
 
+    /// A box at random, or now and then one reaching to ±1e308 or ±∞ along
+    /// some axes (its half-area overflows to ∞, or is ∞·0 = NaN if it is
+    /// also flat): a scene may hold such blocks, and the collapse must
+    /// still give every wide node at most `W` lanes.
+    fn boxed_or_huge() -> impl Strategy<Value = ([f64; 3], [f64; 3])> {
+        let reach = || prop_oneof![3 => Just(None), 1 => Just(Some(1e308)), 1 => Just(Some(f64::INFINITY))];
+        prop_oneof![
+            4 => boxed(),
+            1 => (boxed(), [reach(), reach(), reach()]).prop_map(|((mut lo, mut hi), reach)| {
+                for i in 0..3 {
+                    if let Some(r) = reach[i] {
+                        (lo[i], hi[i]) = (-r, r);
+                    }
+                }
+                (lo, hi)
+            }),
+        ]
+    }
+
     fn boxed() -> impl Strategy<Value = ([f64; 3], [f64; 3])> {
         let size = || prop_oneof![0.0..3.0f64, Just(0.0)];
         ([coord(), coord(), coord()], [size(), size(), size()])
@@ -1547,7 +1583,7 @@ mod tests {
 
         #[test]
         fn tree_visits_what_brute_force_does(
-            boxes in prop::collection::vec(boxed(), 1..60), ray in ray(), p in [coord(), coord(), coord()], eight: bool,
+            boxes in prop::collection::vec(boxed_or_huge(), 1..60), ray in ray(), p in [coord(), coord(), coord()], eight: bool,
             others in [ray(), ray(), ray()],
             open in prop_oneof![Just(None), Just(Some(Open::Shallowest)), Just(Some(Open::Largest))],
         ) {
