@@ -281,6 +281,14 @@ fn bad_settings_and_materials() {
     check(&*with_material(r#"{ "ior": -1.5 }"#), 1, &["materials.m.ior", "got -1.5"]);
     check(&*with_material(r#"{ "diffuse": [-1, 0, 0] }"#), 1, &["materials.m.diffuse, line 1", "must not be negative"]);
     check(&*with_material(r#"{ "transmit": [0, 0, -0.5] }"#), 1, &["materials.m.transmit", "must not be negative"]);
+    // A name with a dot is written as a quoted step, and still located.
+    check(
+        &*format!(
+            r#"{{ {CAMERA}, "materials": {{ "oak.v2": {{ "diffuse": [-1, 0, 0] }} }}, "blocks": [ {{ "material": "oak.v2", "objects": [ {{ "sphere": {{}} }} ] }} ] }}"#
+        ),
+        1,
+        &[r#"materials["oak.v2"].diffuse, line 1, column 123"#, "must not be negative"],
+    );
     check(
         &*with_material(r#"{ "shininess": -2 }"#),
         1,

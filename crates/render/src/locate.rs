@@ -4,28 +4,57 @@
 //! Only run on the error path; a small scanner over the (already validated)
 //! text is enough, no second full parse.
 
-enum Segment<'a> {
-    Key(&'a str),
+enum Segment {
+    Key(String),
     Index(usize),
 }
 
-fn segments(path: &str) -> Option<Vec<Segment<'_>>> {
+/// The step into the member `name` of an object, as the paths of errors
+/// write it: `.name` for a plain name (letters, digits, `_`, `-`), else
+/// `["name"]` with the name as a JSON string (so `materials[".green"]`,
+/// `materials["my wood"]`): a dot or bracket in a name cannot be read as
+/// a step, and [`locate`] reads the path back.
+pub(crate) fn key_step(name: &str) -> String {
+    let plain = !name.is_empty() && name.chars().all(|c| c.is_alphanumeric() || c == '_' || c == '-');
+    if plain {
+        format!(".{name}")
+    } else {
+        // Serialising a string cannot fail.
+        format!("[{}]", serde_json::to_string(name).unwrap_or_default())
+    }
+}
+
+/// The steps of `path`: `name`, `.name`, `[index]` and `["name"]`.
+fn segments(path: &str) -> Option<Vec<Segment>> {
     let mut out = Vec::new();
-    for part in path.split('.') {
-        let (name, mut rest) = match part.find('[') {
-            Some(i) => (&part[..i], &part[i..]),
-            None => (part, ""),
-        };
-        if !name.is_empty() {
-            out.push(Segment::Key(name));
+    let mut rest = path;
+    loop {
+        let end = rest.find(['.', '[']).unwrap_or(rest.len());
+        if end > 0 {
+            out.push(Segment::Key(rest[..end].to_string()));
         }
+        rest = &rest[end..];
         while let Some(r) = rest.strip_prefix('[') {
-            let end = r.find(']')?;
-            out.push(Segment::Index(r[..end].parse().ok()?));
-            rest = &r[end + 1..];
+            if r.starts_with('"') {
+                // A JSON string: up to the first quote not escaped.
+                let mut i = 1;
+                while *r.as_bytes().get(i)? != b'"' {
+                    i += if r.as_bytes()[i] == b'\\' { 2 } else { 1 };
+                }
+                out.push(Segment::Key(serde_json::from_str(r.get(..=i)?).ok()?));
+                rest = r[i + 1..].strip_prefix(']')?;
+            } else {
+                let end = r.find(']')?;
+                out.push(Segment::Index(r[..end].parse().ok()?));
+                rest = &r[end + 1..];
+            }
+        }
+        match rest.strip_prefix('.') {
+            Some(r) => rest = r,
+            None if rest.is_empty() => return Some(out),
+            None => return None,
         }
     }
-    Some(out)
 }
 
 struct Scanner<'a> {
@@ -45,8 +74,21 @@ impl<'a> Scanner<'a> {
         (self.b.get(self.pos) == Some(&c)).then(|| self.pos += 1)
     }
 
-    /// A string's raw contents (escapes are left as they are: keys in scene
-    /// files are plain names).
+    /// A key: the string's contents, escapes decoded (a name may hold any
+    /// character, written as an escape or not).
+    fn key(&mut self) -> Option<std::borrow::Cow<'a, str>> {
+        self.ws();
+        let start = self.pos;
+        let raw = self.string()?;
+        if raw.contains('\\') {
+            let b: &'a [u8] = self.b;
+            serde_json::from_slice::<String>(&b[start..self.pos]).ok().map(std::borrow::Cow::Owned)
+        } else {
+            Some(std::borrow::Cow::Borrowed(raw))
+        }
+    }
+
+    /// A string's raw contents (escapes left as they are).
     fn string(&mut self) -> Option<&'a str> {
         self.eat(b'"')?;
         let start = self.pos;
@@ -102,9 +144,9 @@ impl<'a> Scanner<'a> {
             Segment::Key(k) => {
                 self.eat(b'{')?;
                 loop {
-                    let key = self.string()?;
+                    let key = self.key()?;
                     self.eat(b':')?;
-                    if key == *k {
+                    if key == k.as_str() {
                         self.ws();
                         return Some(());
                     }
@@ -140,7 +182,7 @@ pub(crate) fn locate(text: &str, path: &str) -> Option<(usize, usize)> {
 
 #[cfg(test)]
 mod tests {
-    use super::locate;
+    use super::{key_step, locate};
 
     fn check(path: &str, want: Option<(usize, usize)>) {
         let text = "{\n  \"a\": [1, {\"b\": \"x,]\"}, [2, 3]],\n  \"c\": {\"d\": {}, \"e\": true}\n}";
@@ -157,5 +199,30 @@ mod tests {
         check("c.e", Some((3, 23)));
         check("c.f", None);
         check("a[5]", None);
+        check("c[\"e\"]", Some((3, 23)));
+        check("a[1][\"b\"]", Some((2, 18)));
+        check("a[1].\"b\"", None);
+        check("c[\"e\"", None);
+    }
+
+    /// A member whose name holds dots, brackets, quotes or escapes is
+    /// found from the step `key_step` writes for it.
+    #[test]
+    fn any_name_is_found_from_its_step() {
+        let names = ["green", ".green", "a.b", "x[0]", "say \"hi\"", "back\\slash", "my wood", "", "ünï", "]"];
+        for name in names {
+            let json = serde_json::to_string(name).expect("a string serialises");
+            // As written, and with each `g` as an escape.
+            for written in [json.clone(), json.replace('g', "\\u0067")] {
+                let text = format!("{{\"m\": {{\"other\": 1, {written}: {{\"ambient\": 7}}}}}}");
+                let path = format!("m{}.ambient", key_step(name));
+                let (line, column) = locate(&text, &path).unwrap_or_else(|| panic!("{path} not found in {text}"));
+                assert_eq!(line, 1);
+                // Columns count characters.
+                assert_eq!(text.chars().nth(column - 1), Some('7'), "{path} in {text}");
+            }
+        }
+        assert_eq!(key_step("green"), ".green");
+        assert_eq!(key_step(".green"), "[\".green\"]");
     }
 }

@@ -695,7 +695,7 @@ impl SceneFile {
 
         let mut materials = Vec::with_capacity(self.materials.len() + 1);
         for (name, m) in &self.materials {
-            let place = format!("materials.{name}");
+            let place = format!("materials{}", crate::locate::key_step(name));
             for (t, what) in [
                 (&m.ambient, "ambient"),
                 (&m.diffuse, "diffuse"),
