@@ -734,14 +734,29 @@ pub mod bound {
         x == 0.0 || (1e-80..=1e80).contains(&x.abs())
     }
 
-    /// Whether every stored coefficient and the centre are [`moderate`]: the
-    /// range where accuracy is promised. (Beyond it, subnormal products lose
-    /// bits and squares overflow; only "no panic, no NaN" holds there.)
+    /// How far apart in size the non-zero entries of a quadric's `A` may be
+    /// for accuracy to be promised: a transform chain that stretches a solid
+    /// by more than 10¹⁶ leaves entries that are mostly its rounding (a
+    /// cylinder scaled by 10¹⁸ across and 5·10²³ along, then tilted, stored
+    /// `A_zz = 1.4e-60` beside `A_xx = 0.08`), and far from the centre the
+    /// sign of `f` turns on them: its bounding box (from the stored `A`) and
+    /// its computed membership (along the null axis it found) then disagree.
+    pub const MAX_SPREAD: f64 = 1e32;
+
+    /// Whether every stored coefficient and the centre are [`moderate`], and
+    /// a quadric's `A` spreads over at most [`MAX_SPREAD`]: the range where
+    /// accuracy is promised. (Beyond it, subnormal products lose bits,
+    /// squares overflow, or rounding residue decides; only "no panic, no
+    /// NaN" holds there.)
     pub fn moderate_solid(s: &Solid) -> bool {
         match s {
             Solid::Quadric(q) => {
                 let (c, a, w, k) = q.local_parts();
-                c.iter().chain(a.iter()).chain(w.iter()).all(|x| moderate(*x)) && moderate(k)
+                let sizes = a.iter().map(|x| x.abs()).filter(|x| *x > 0.0);
+                let (lo, hi) = sizes.fold((f64::INFINITY, 0.0f64), |(lo, hi), x| (lo.min(x), hi.max(x)));
+                c.iter().chain(a.iter()).chain(w.iter()).all(|x| moderate(*x))
+                    && moderate(k)
+                    && (hi == 0.0 || hi <= MAX_SPREAD * lo)
             }
             Solid::HalfSpace(h) => {
                 let v = h.vector();
