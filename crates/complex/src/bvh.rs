@@ -459,24 +459,12 @@ impl Bvh {
 
     /// [`Bvh::build`], with subtrees of `parallel_from` blocks or more built
     /// on two threads, eight-wide if `eight`, collapsed by `open` (`None`:
-    /// by the cheaper rule, see [`Tree::from_binary`]).
+    /// the cheapest collapse, see [`Tree::from_binary`]).
     fn build_with(entries: &[(u32, Aabb)], parallel_from: usize, eight: bool, open: Option<Open>) -> Self {
         if entries.is_empty() {
             return Bvh::default();
         }
-        let mut work: Vec<Entry> = entries
-            .iter()
-            .map(|(i, b)| Entry {
-                index: *i,
-                min: [b.min.x, b.min.y, b.min.z],
-                max: [b.max.x, b.max.y, b.max.z],
-                centre: [0.5 * (b.min.x + b.max.x), 0.5 * (b.min.y + b.max.y), 0.5 * (b.min.z + b.max.z)],
-            })
-            .collect();
-        let mut binary =
-            Binary { nodes: Vec::with_capacity(2 * entries.len()), items: Vec::with_capacity(entries.len()) };
-        binary.nodes.push(EMPTY_NODE);
-        binary.build_node(0, &mut work, 0, parallel_from);
+        let binary = Binary::of(entries, parallel_from);
         let nodes = if eight {
             Nodes::Eight(Tree::from_binary(&binary.nodes, open))
         } else {
@@ -1002,6 +990,25 @@ struct Binary {
 }
 
 impl Binary {
+    /// The binary tree over `entries` (not empty), subtrees of
+    /// `parallel_from` blocks or more built on two threads.
+    fn of(entries: &[(u32, Aabb)], parallel_from: usize) -> Self {
+        let mut work: Vec<Entry> = entries
+            .iter()
+            .map(|(i, b)| Entry {
+                index: *i,
+                min: [b.min.x, b.min.y, b.min.z],
+                max: [b.max.x, b.max.y, b.max.z],
+                centre: [0.5 * (b.min.x + b.max.x), 0.5 * (b.min.y + b.max.y), 0.5 * (b.min.z + b.max.z)],
+            })
+            .collect();
+        let mut binary =
+            Binary { nodes: Vec::with_capacity(2 * entries.len()), items: Vec::with_capacity(entries.len()) };
+        binary.nodes.push(EMPTY_NODE);
+        binary.build_node(0, &mut work, 0, parallel_from);
+        binary
+    }
+
     /// Fills node `n` with `work`; the two halves of a subtree of at least
     /// `parallel_from` blocks are built on two threads (`rayon::join`), each
     /// into a tree of its own grafted in place after: the same nodes in the
@@ -1553,9 +1560,8 @@ mod tests {
             }
         }
 
-        /// The collapsed tree, four- and eight-wide, by either rule, visits exactly the
-        /// blocks whose own boxes the ray enters (no early exit), and
-        /// `visit_point` exactly those whose boxes hold the point.
+        /// The cheapest collapse costs what the least of every possible
+        /// choice of lanes costs, and no more than a greedy rule's.
         #[test]
         fn cheapest_collapse_is_the_least_of_all(boxes in prop::collection::vec(boxed(), 2..12)) {
             let entries: Vec<(u32, Aabb)> = boxes
@@ -1563,7 +1569,7 @@ mod tests {
                 .enumerate()
                 .map(|(i, (lo, hi))| (i as u32, Aabb { min: Point3::from(*lo), max: Point3::from(*hi) }))
                 .collect();
-            let binary = binary_of(&entries);
+            let binary = Binary::of(&entries, PARALLEL_FROM).nodes;
             prop_assume!(binary[0].count == 0);
             for w in [4, 8] {
                 let want = brute_cost(&binary, 0, w);
@@ -1581,6 +1587,9 @@ mod tests {
             }
         }
 
+        /// The collapsed tree, four- and eight-wide, by any rule, visits exactly the
+        /// blocks whose own boxes the ray enters (no early exit), and
+        /// `visit_point` exactly those whose boxes hold the point.
         #[test]
         fn tree_visits_what_brute_force_does(
             boxes in prop::collection::vec(boxed_or_huge(), 1..60), ray in ray(), p in [coord(), coord(), coord()], eight: bool,
@@ -1728,22 +1737,6 @@ mod tests {
             };
             same_tree(&chosen, &cheapest);
         }
-    }
-
-    /// The binary tree `Bvh::build_with` collapses.
-    fn binary_of(entries: &[(u32, Aabb)]) -> Vec<Node> {
-        let mut work: Vec<Entry> = entries
-            .iter()
-            .map(|(i, b)| Entry {
-                index: *i,
-                min: b.min.coords.into(),
-                max: b.max.coords.into(),
-                centre: (0.5 * (b.min.coords + b.max.coords)).into(),
-            })
-            .collect();
-        let mut binary = Binary { nodes: vec![EMPTY_NODE], items: Vec::new() };
-        binary.build_node(0, &mut work, 0, PARALLEL_FROM);
-        binary.nodes
     }
 
     /// Every set of lanes `x`'s subtree can give a wide node above it: `x`
