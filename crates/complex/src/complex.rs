@@ -863,9 +863,9 @@ impl Complex {
         SCRATCH.with(|s| match s.try_borrow_mut() {
             Ok(mut s) => {
                 let Scratch { sets, cuts, .. } = &mut *s;
-                self.partition_core(ray, reach, sets, cuts, until, out);
+                self.partition_core(ray, reach, sets, cuts, until, Events::All, out);
             }
-            Err(_) => self.partition_core(ray, reach, &mut Sets::default(), &mut Vec::new(), until, out),
+            Err(_) => self.partition_core(ray, reach, &mut Sets::default(), &mut Vec::new(), until, Events::All, out),
         });
     }
 
@@ -879,7 +879,9 @@ impl Complex {
     /// interval reaching into `[0, T]` is among them. If none of those
     /// events qualifies, the next try reaches to the next interval end
     /// after `T`; after a few tries the full partition is formed. `out` is scratch: it
-    /// is left holding a prefix of the partition, or nothing (when at most
+    /// is left holding a prefix of the partition's segments and, of its
+    /// events, only the one returned (the hit points and normals of the
+    /// events before it are not computed), or nothing (when at most
     /// one block has intervals past ε the answer is read off that block's
     /// intervals, and no partition is formed). Allocates only as
     /// [`Complex::partition_into`] does.
@@ -905,7 +907,7 @@ impl Complex {
                             return answer;
                         }
                     }
-                    self.partition_of_sets(ray, sets, cuts, until, out);
+                    self.partition_of_sets(ray, sets, cuts, until, Events::FirstInterface, out);
                     // Events are formed only up to `until`, where they are
                     // exact. With `until = ∞` nothing was cut off.
                     let e = found(out);
@@ -914,11 +916,12 @@ impl Complex {
                     }
                     after = until;
                 }
-                self.partition_core(ray, f64::INFINITY, sets, cuts, f64::INFINITY, out);
+                self.partition_core(ray, f64::INFINITY, sets, cuts, f64::INFINITY, Events::FirstInterface, out);
                 found(out)
             }
             Err(_) => {
-                self.partition_core(ray, f64::INFINITY, &mut Sets::default(), &mut Vec::new(), f64::INFINITY, out);
+                let (sets, cuts) = (&mut Sets::default(), &mut Vec::new());
+                self.partition_core(ray, f64::INFINITY, sets, cuts, f64::INFINITY, Events::FirstInterface, out);
                 found(out)
             }
         })
@@ -1008,16 +1011,26 @@ impl Complex {
         sets: &mut Sets,
         cuts: &mut Vec<f64>,
         until: f64,
+        events: Events,
         out: &mut Partition,
     ) {
         self.collect_sets(ray, reach, sets);
-        self.partition_of_sets(ray, sets, cuts, until, out);
+        self.partition_of_sets(ray, sets, cuts, until, events, out);
     }
 
     /// The partition formed from `sets` (sorted by block id), its events
     /// only up to `until` (the segments up to the first one past it; all of
-    /// them, and no events, for `until = -∞`).
-    fn partition_of_sets(&self, ray: &Ray, sets: &mut Sets, cuts: &mut Vec<f64>, until: f64, out: &mut Partition) {
+    /// them, and no events, for `until = -∞`), and of those only the ones
+    /// `events` asks for.
+    fn partition_of_sets(
+        &self,
+        ray: &Ray,
+        sets: &mut Sets,
+        cuts: &mut Vec<f64>,
+        until: f64,
+        events: Events,
+        out: &mut Partition,
+    ) {
         out.clear();
         // The segments alone (a shadow ray's query), with at most one block:
         // they alternate between nothing and the block at its interval
@@ -1094,12 +1107,17 @@ impl Complex {
                 })
             };
             let Some((block, solid, entering)) = entry.or_else(exit) else { continue };
-            let point = self.hit_point(ray, t, block, solid);
-            let normal = self.normal(block, solid, &point);
             let medium = |o: Option<BlockId>| {
                 o.map(|id| &self.blocks[id.index()]).filter(|b| b.is_transparent()).map(|b| b.material())
             };
             let same_medium = medium(s0.owner).is_some() && medium(s0.owner) == medium(s1.owner);
+            let interface = t > self.epsilon && !same_medium;
+            if events == Events::FirstInterface && !interface {
+                continue;
+            }
+            // The hit point's refinement and the normal: the event's dearest part.
+            let point = self.hit_point(ray, t, block, solid);
+            let normal = self.normal(block, solid, &point);
             out.events.push(Event {
                 t,
                 point,
@@ -1110,8 +1128,22 @@ impl Complex {
                 normal,
                 same_medium,
             });
+            if events == Events::FirstInterface {
+                break;
+            }
         }
     }
+}
+
+/// Which events [`Complex::partition_of_sets`] forms.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Events {
+    /// Every event (up to `until`): the partition's.
+    All,
+    /// Only the first after ε where the medium changes, the answer of
+    /// [`Complex::first_interface`] (`t > ε`, not [`Event::same_medium`]);
+    /// the others' hit points and normals are not computed.
+    FirstInterface,
 }
 
 /// The search state of [`Complex::cast_opaque`] for one ray: the nearest
