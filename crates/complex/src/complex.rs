@@ -407,6 +407,12 @@ impl Complex {
 
     /// The non-empty sets (after the ε rule) of the blocks whose boxes the ray
     /// crosses before `max_t`, sorted by block id.
+    ///
+    /// The walk starts at `min(ε, max_t)`, not at 0: a block whose padded
+    /// box the ray has left by then (the one a secondary ray leaves, if
+    /// thin) has its intervals clipped to that box ([`Complex::clip_to_box`],
+    /// the same slabs as the walk's), so they all end before ε and the ε
+    /// rule would remove every one of them. The sets are the same.
     fn collect_sets(&self, ray: &Ray, max_t: f64, out: &mut Sets) {
         out.clear();
         let eps = self.epsilon;
@@ -414,12 +420,13 @@ impl Complex {
             out.push(BlockId(i), spans, eps, false);
         };
         let rb = RayBoxes::new(ray);
+        let from = if max_t < eps { max_t } else { eps };
         let mut t_max = max_t;
         let mut scratch = Spans::Empty;
-        self.bvh.traverse_any(&rb, 0.0, &mut t_max, |k, _, _| {
+        self.bvh.traverse_any(&rb, from, &mut t_max, |k, _, _| {
             push(self.kernel.block(k), self.slot_spans(k, ray, &rb, &mut scratch))
         });
-        for i in self.unbounded_crossed(&rb, 0.0, max_t) {
+        for i in self.unbounded_crossed(&rb, from, max_t) {
             push(i, self.block_spans(i, ray, &rb, &mut scratch));
         }
         out.sort();

@@ -230,7 +230,9 @@ proptest! {
 
             // segments_within(max_t) is the partition's segments that start
             // before max_t, the last one ending at or after max_t.
-            let mut reach: Vec<f64> = vec![-1.0, 0.0, eps, 0.5, 2.0, f64::NAN, f64::INFINITY];
+            // (Below ε too: the walk that collects the sets starts at
+            // `min(ε, max_t)`.)
+            let mut reach: Vec<f64> = vec![-1.0, 0.0, 0.5 * eps, eps, 0.5, 2.0, f64::NAN, f64::INFINITY];
             reach.extend(p.segments.iter().flat_map(|s| [s.start, s.end, 0.5 * (s.start + s.end)]));
             for m in reach {
                 let mut within = p.clone();
