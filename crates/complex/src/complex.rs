@@ -870,9 +870,9 @@ impl Complex {
         SCRATCH.with(|s| match s.try_borrow_mut() {
             Ok(mut s) => {
                 let Scratch { sets, cuts, .. } = &mut *s;
-                self.partition_core(ray, reach, sets, cuts, until, Events::All, out);
+                self.partition_core(ray, reach, (sets, cuts), until, Events::All, out);
             }
-            Err(_) => self.partition_core(ray, reach, &mut Sets::default(), &mut Vec::new(), until, Events::All, out),
+            Err(_) => self.partition_core(ray, reach, (&mut Sets::default(), &mut Vec::new()), until, Events::All, out),
         });
     }
 
@@ -923,12 +923,12 @@ impl Complex {
                     }
                     after = until;
                 }
-                self.partition_core(ray, f64::INFINITY, sets, cuts, f64::INFINITY, Events::FirstInterface, out);
+                self.partition_core(ray, f64::INFINITY, (sets, cuts), f64::INFINITY, Events::FirstInterface, out);
                 found(out)
             }
             Err(_) => {
-                let (sets, cuts) = (&mut Sets::default(), &mut Vec::new());
-                self.partition_core(ray, f64::INFINITY, sets, cuts, f64::INFINITY, Events::FirstInterface, out);
+                let buffers = (&mut Sets::default(), &mut Vec::new());
+                self.partition_core(ray, f64::INFINITY, buffers, f64::INFINITY, Events::FirstInterface, out);
                 found(out)
             }
         })
@@ -1015,8 +1015,7 @@ impl Complex {
         &self,
         ray: &Ray,
         reach: f64,
-        sets: &mut Sets,
-        cuts: &mut Vec<f64>,
+        (sets, cuts): (&mut Sets, &mut Vec<f64>),
         until: f64,
         events: Events,
         out: &mut Partition,
