@@ -894,7 +894,9 @@ impl Complex {
     /// [`Complex::partition_into`] does.
     pub fn first_interface(&self, ray: &Ray, out: &mut Partition) -> Option<Event> {
         let eps = self.epsilon;
-        let found = |out: &Partition| out.events.iter().find(|e| e.t > eps && !e.same_medium).copied();
+        // `Events::FirstInterface` forms no event but the answer (`t > ε`,
+        // not within one medium), so the answer is the first event formed.
+        let found = |out: &Partition| out.events.first().copied();
         SCRATCH.with(|s| match s.try_borrow_mut() {
             Ok(mut s) => {
                 let Scratch { sets, previous, cuts } = &mut *s;
