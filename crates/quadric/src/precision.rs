@@ -297,7 +297,7 @@ impl Quadric {
             let (a, mut f) = (&self.a, Compensated::default());
             for i in 0..3 {
                 f.add_product(a[(i, i)], y[i], y[i]);
-                f.add_product(2.0 * self.w[i], y[i], 1.0);
+                f.add_product2(2.0 * self.w[i], y[i]);
                 // A diagonal `A`'s cross terms are exact zeros, which add nothing.
                 for j in (i + 1..3).filter(|_| !self.diagonal) {
                     f.add_product(2.0 * a[(i, j)], y[i], y[j]);
@@ -320,7 +320,7 @@ impl HalfSpace {
         refine(ray, lambda, &o.coords, |y| {
             let mut f = Compensated::default();
             for i in 0..3 {
-                f.add_product(n[i], y[i], 1.0);
+                f.add_product2(n[i], y[i]);
             }
             f.add(d);
             (f.value(), n)
@@ -368,6 +368,16 @@ impl Compensated {
         let p_lo = a.mul_add(bc, -p);
         self.add(p);
         self.lo += a.mul_add(bc_lo, p_lo);
+    }
+
+    /// Adds `a·b` (exactly by TwoProduct): `add_product(a, b, 1.0)`
+    /// without the products by one, the same sum for finite `b`.
+    #[inline(always)]
+    fn add_product2(&mut self, a: f64, b: f64) {
+        let p = a * b;
+        let p_lo = a.mul_add(b, -p);
+        self.add(p);
+        self.lo += p_lo;
     }
 
     #[inline(always)]
@@ -712,4 +722,37 @@ fn ulp(x: f64) -> f64 {
         return f64::INFINITY;
     }
     next_up(a) - a
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn finite() -> impl Strategy<Value = f64> {
+        prop_oneof![
+            -1e300..1e300f64,
+            -1e3..1e3f64,
+            Just(0.0),
+            Just(-0.0),
+            Just(f64::MIN_POSITIVE / 3.0),
+            Just(-f64::MAX),
+            any::<f64>().prop_filter("finite", |x| x.is_finite()),
+        ]
+    }
+
+    proptest! {
+        /// `add_product2(a, b)` leaves the pair bit for bit where
+        /// `add_product(a, b, 1.0)` does, for finite terms in any order.
+        #[test]
+        fn a_product_of_two_adds_what_a_product_by_one_adds(terms in proptest::collection::vec((finite(), finite()), 1..6)) {
+            let (mut two, mut three) = (Compensated::default(), Compensated::default());
+            for (a, b) in terms {
+                two.add_product2(a, b);
+                three.add_product(a, b, 1.0);
+                prop_assert_eq!(two.hi.to_bits(), three.hi.to_bits());
+                prop_assert!(two.lo.to_bits() == three.lo.to_bits() || (two.lo.is_nan() && three.lo.is_nan()), "{} against {}", two.lo, three.lo);
+            }
+        }
+    }
 }
