@@ -79,8 +79,18 @@ pub struct Shader<'w> {
 /// and weights are finite and non-negative, but their products can overflow
 /// (a light of 1e300 on a diffuse 1e300), and `0 · ∞` would be a NaN pixel;
 /// no light (or a zero weight) is no light, however bright the other factor.
+/// Without a branch per channel: the only NaN product of two such factors
+/// is `0 · ∞`, which gives `+0`, and `+ 0.0` turns a zero product's sign
+/// to `+` as a zero factor's result has it; every other product is itself.
 fn weigh(a: &Rgb, b: &Rgb) -> Rgb {
-    a.zip_map(b, |x, y| if x == 0.0 || y == 0.0 { 0.0 } else { x * y })
+    a.zip_map(b, |x, y| {
+        let p = x * y;
+        if p.is_nan() {
+            0.0
+        } else {
+            p + 0.0
+        }
+    })
 }
 
 fn is_zero(c: &Rgb) -> bool {
@@ -394,6 +404,22 @@ mod tests {
     /// Against libm's `powf`, an independent implementation: within
     /// `(n + 1)·2u` relative for every whole exponent up to the limit,
     /// exactly `powf` above it and for fractional exponents.
+    /// Bit for bit the rule it implements (a zero factor gives `+0`, else
+    /// the product) for every pair of non-negative factors of these kinds:
+    /// zeros of both signs, products that underflow or overflow, infinity.
+    #[test]
+    fn weigh_is_zero_for_a_zero_factor_else_the_product() {
+        let values = [0.0, -0.0, 1e-300, 1e-200, 5e-324, 0.25, 1.0, 3.5, 1e200, 1e300, f64::MAX, f64::INFINITY];
+        for x in values {
+            for y in values {
+                let want = if x == 0.0 || y == 0.0 { 0.0 } else { x * y };
+                let got = weigh(&Rgb::new(x, 1.0, y), &Rgb::new(y, 1.0, x));
+                assert_eq!(got[0].to_bits(), want.to_bits(), "{x} * {y}");
+                assert_eq!(got[2].to_bits(), want.to_bits(), "{y} * {x}");
+            }
+        }
+    }
+
     #[test]
     fn power_is_powf_to_within_the_rounding_of_its_products() {
         let u = f64::EPSILON / 2.0;
