@@ -21,6 +21,12 @@ bench-pov *ARGS:
 bench-scaling *ARGS:
     bash scripts/bench-scaling.sh {{ARGS}}
 
+# The keep-or-drop check of a speed change: two komplex binaries (before,
+# after) render every scene to identical EXR files; `--instructions` adds
+# callgrind's render-only instruction counts. See the script's --help.
+compare-builds *ARGS:
+    bash scripts/compare-builds.sh {{ARGS}}
+
 # A profile-guided release build in target/pgo/release/komplex (needs
 # llvm-profdata; see the script). `--verify` checks its images are identical.
 build-pgo *ARGS:

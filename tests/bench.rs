@@ -141,3 +141,41 @@ fn scaling_script_prints_consistent_growth() {
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("unknown argument '--frobnicate'"));
 }
+
+/// `scripts/compare-builds.sh` (the keep-or-drop check of a speed change):
+/// a binary against itself renders the same images, and the script says so
+/// and succeeds; against a wrapper of it that writes half-float colour,
+/// every render differs, each is named, and the script fails.
+#[test]
+fn compare_builds_tells_equal_images_from_different_ones() {
+    use std::os::unix::fs::PermissionsExt;
+    let root = crate::support::root();
+    let bin = env!("CARGO_BIN_EXE_komplex");
+    let dir = tempdir();
+    let half = dir.path().join("komplex-half");
+    std::fs::write(&half, format!("#!/bin/sh\nexec '{bin}' \"$@\" --half\n")).unwrap();
+    std::fs::set_permissions(&half, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let compare = |after: &std::path::Path| {
+        let out = std::process::Command::new("bash")
+            .arg(root.join("scripts/compare-builds.sh"))
+            .args(["--width", "40", "--height", "30", bin])
+            .arg(after)
+            .arg(scene("table.json"))
+            .output()
+            .expect("bash runs");
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stdout).to_string(),
+            String::from_utf8_lossy(&out.stderr).to_string(),
+        )
+    };
+    let (code, stdout, stderr) = compare(std::path::Path::new(bin));
+    assert_eq!(code, Some(0), "{stdout}{stderr}");
+    assert!(stdout.contains("images: 0 of 3 renders differ"), "{stdout}");
+    let (code, stdout, stderr) = compare(&half);
+    assert_eq!(code, Some(1), "{stdout}{stderr}");
+    for mode in ["plain", "--samples 2", "--precision fast"] {
+        assert!(stdout.contains(&format!("differs: table ({mode})")), "{stdout}");
+    }
+    assert!(stdout.contains("images: 3 of 3 renders differ"), "{stdout}");
+}
