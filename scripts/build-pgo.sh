@@ -10,8 +10,8 @@
 # Usage: scripts/build-pgo.sh [--verify]
 # The binary: $CARGO_TARGET_DIR/pgo/release/komplex (target/ by default);
 # the normal release build in target/release is not touched.
-# --verify: also builds the normal release binary, renders every committed
-# scene with both, and fails unless their EXR files are identical.
+# --verify: also builds the normal release binary and fails unless both
+# render every scene to identical EXR files (scripts/compare-builds.sh).
 #
 # Needs an llvm-profdata that reads the raw profiles of rustc's LLVM:
 # LLVM_PROFDATA=path, else rustup's (`rustup component add llvm-tools`),
@@ -86,13 +86,7 @@ echo "$target/pgo/release/komplex"
 if [ "$verify" = 1 ]; then
     echo "== verify: the same images as the normal release build"
     cargo build --release --quiet --bin komplex
-    for scene in scenes/*.json scenes/bench/*.json; do
-        name=$(basename "$scene" .json)
-        for build in release pgo/release; do
-            "$target/$build/komplex" render "$scene" --width 160 --height 120 \
-                -o "$work/$name.${build%%/*}.exr" >"$work/render.log" 2>&1 || { cat "$work/render.log" >&2; exit 1; }
-        done
-        cmp "$work/$name.release.exr" "$work/$name.pgo.exr" || { echo "build-pgo: $name differs" >&2; exit 1; }
-        echo "same: $name"
-    done
+    # Every committed and generated bench scene, plain, `--samples 2` and
+    # `--precision fast`, compared byte for byte (fails if any differ).
+    bash scripts/compare-builds.sh --width 160 --height 120 "$target/release/komplex" "$target/pgo/release/komplex"
 fi

@@ -401,9 +401,6 @@ fn facing_normal(outward: &Vector3<f64>, dir: &Vector3<f64>) -> Vector3<f64> {
 mod tests {
     use super::*;
 
-    /// Against libm's `powf`, an independent implementation: within
-    /// `(n + 1)·2u` relative for every whole exponent up to the limit,
-    /// exactly `powf` above it and for fractional exponents.
     /// Bit for bit the rule it implements (a zero factor gives `+0`, else
     /// the product) for every pair of non-negative factors of these kinds:
     /// zeros of both signs, products that underflow or overflow, infinity.
@@ -420,6 +417,9 @@ mod tests {
         }
     }
 
+    /// Against libm's `powf`, an independent implementation: within
+    /// `(n + 1)·2u` relative for every whole exponent up to the limit,
+    /// exactly `powf` above it and for fractional exponents.
     #[test]
     fn power_is_powf_to_within_the_rounding_of_its_products() {
         let u = f64::EPSILON / 2.0;
