@@ -148,18 +148,6 @@ pub fn stable_roots(s: f64, t: f64, u: f64, disc: f64) -> (f64, f64) {
     }
 }
 
-/// Whether `x` is negative, treating `-0.0` as zero.
-#[inline(always)]
-pub fn is_negative(x: f64) -> bool {
-    x < 0.0
-}
-
-/// Whether `x` is positive, treating `-0.0` as zero.
-#[inline(always)]
-pub fn is_positive(x: f64) -> bool {
-    x > 0.0
-}
-
 #[cfg(test)]
 mod tests {
     use proptest::prelude::*;

@@ -2,6 +2,7 @@
 
 mod accuracy;
 mod bad_input;
+mod compensated;
 mod fuzz_regressions;
 mod laws;
 mod oracle;
