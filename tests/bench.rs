@@ -124,15 +124,29 @@ fn scaling_script_prints_consistent_growth() {
         .map(|l| l.split_whitespace().map(|f| f.parse().unwrap()).collect())
         .collect();
     assert_eq!(rounds.len(), 2, "{text}");
+    // Each printed figure carries the rounding of its format: seconds to
+    // 1e-6 (`%.6f`), growth to 0.01 (`%.2f`); the ratio of rounded seconds
+    // is off by at most the sum of their relative roundings.
+    let tolerance = |want: f64, s1: f64, s2: f64| want * 1.01 * (0.5e-6 / s1 + 0.5e-6 / s2) + 0.005 + 1e-9;
     for f in &rounds {
         // round, small s, small rays, large s, large rays, growth
         let want = (f[3] / f[4]) / (f[1] / f[2]);
         assert!(f[1] > 0.0 && f[3] > 0.0, "{text}");
-        // The seconds are printed to the microsecond: compare loosely.
-        assert!((f[5] - want).abs() <= 0.05 * want + 0.5, "round {f:?}: growth {} but {want}", f[5]);
+        assert!((f[5] - want).abs() <= tolerance(want, f[1], f[3]), "round {f:?}: growth {} but {want}", f[5]);
     }
-    assert!(text.contains("growth per ray, fastest renders: "), "{text}");
-    assert!(text.contains("growth per ray, median of 2 rounds: "), "{text}");
+    let summary = |prefix: &str| -> f64 {
+        let line = text.lines().find(|l| l.starts_with(prefix)).unwrap_or_else(|| panic!("no '{prefix}' in {text}"));
+        line[prefix.len()..].split('x').next().unwrap().parse().unwrap()
+    };
+    // The fastest renders of each size, wherever they fell.
+    let (ts, tl) = rounds.iter().fold((f64::INFINITY, f64::INFINITY), |(a, b), f| (a.min(f[1]), b.min(f[3])));
+    let want = (tl / rounds[0][4]) / (ts / rounds[0][2]);
+    let fastest = summary("growth per ray, fastest renders: ");
+    assert!((fastest - want).abs() <= tolerance(want, ts, tl), "fastest {fastest} but {want}: {text}");
+    // The median of two rounds is their mean.
+    let median = summary("growth per ray, median of 2 rounds: ");
+    let want = (rounds[0][5] + rounds[1][5]) / 2.0;
+    assert!((median - want).abs() <= 0.005 + 1e-9, "median {median} but {want}: {text}");
 
     let bad = run(&["--rounds", "0"]);
     assert_eq!(bad.status.code(), Some(2));
