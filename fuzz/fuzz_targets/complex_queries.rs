@@ -166,7 +166,7 @@ fuzz_target!(|input: ComplexInput| {
             .collect();
         let sets = c.intervals(&ray);
         // A block the boxes cull may differ from the brute force only beyond
-        // the range where the kernel promises accuracy (SPEC: coordinates up
+        // the range where the kernel promises accuracy (docs/model.md §7.3, "Range": coordinates up
         // to about 1e150; a ray with a direction component of 1e-270 meets
         // spurious roots near 1e273, where `s = r·Ar` underflows).
         let mut k = 0;

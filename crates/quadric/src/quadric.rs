@@ -362,7 +362,7 @@ impl Quadric {
     /// carries `solid` as the surface it lies on.
     ///
     /// `f(p + λr) = sλ² + 2tλ + u` with `s = rᵀAr`, `t = rᵀ(A(p-c) + w)`,
-    /// `u = f(p)`, solved by the table of SPEC §2. Numerics (see
+    /// `u = f(p)`, solved by the case table of docs/model.md §2.2. Numerics (see
     /// `docs/quadric.md`): coefficients relative to the local centre `c`;
     /// the ray re-based exactly at the foot of the perpendicular from `c`,
     /// near the roots, so that nothing cancels however far the ray starts;

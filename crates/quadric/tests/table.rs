@@ -1,4 +1,4 @@
-//! Every row of the SPEC §2 table, written as data: `check(solid, ray, expected)`.
+//! Every row of the case table of docs/model.md §2.2, written as data: `check(solid, ray, expected)`.
 //!
 //! Expected sets are derived by hand from `f(p + λr) = sλ² + 2tλ + u` (the
 //! arithmetic is in a comment where it is not obvious) and compared with a

@@ -1,5 +1,5 @@
 //! The exact reference for blocks (intersections of solids) and complexes
-//! (unions of blocks with the priority partition of SPEC §3).
+//! (unions of blocks with the priority partition of docs/model.md §3.5).
 //!
 //! Every root is held exactly as `(a + b√d)/e` with dyadic `a`, `d`, `e`
 //! (`b ∈ {-1, 0, 1}`), so the order of any two ends — of the same solid, of
@@ -200,7 +200,7 @@ pub fn solid_set(solid: &Solid, index: u32, ray: &Ray) -> ExactSet {
     // before 0 becomes the free start.
     let origin = Root::of_f64(0.0);
     line.into_iter()
-        .filter(|(_, hi)| hi.as_ref().map_or(true, |h| h.cmp_exact(&origin) == Ordering::Greater))
+        .filter(|(_, hi)| hi.as_ref().is_none_or(|h| h.cmp_exact(&origin) == Ordering::Greater))
         .map(|(lo, hi)| {
             let lo = match lo {
                 Some(l) if l.cmp_exact(&origin) != Ordering::Less => crossing(l),
@@ -265,7 +265,7 @@ pub struct ExactSegment {
     pub owner: Option<usize>,
 }
 
-/// The exact partition of a ray by a complex (SPEC §3).
+/// The exact partition of a ray by a complex (docs/model.md §3.5).
 #[derive(Clone, Debug)]
 pub struct ExactPartition {
     /// Segments in order, covering `[0, ∞)`, consecutive owners different.
@@ -276,7 +276,7 @@ pub struct ExactPartition {
 
 impl ExactPartition {
     /// The partition of `ray` by `blocks` in priority order: an interval
-    /// contained in `[0, epsilon]` is no hit (SPEC §3); a point belongs to
+    /// contained in `[0, epsilon]` is no hit (docs/model.md §3.3); a point belongs to
     /// the first opaque block containing it, else the first transparent one.
     pub fn new(blocks: &[ExactBlock], ray: &Ray, epsilon: f64) -> ExactPartition {
         let eps = Root::of_f64(epsilon);

@@ -13,7 +13,7 @@
 //! rounded, to [`PRECISION`] bits.
 //!
 //! [`csg`] extends this to blocks (intersections of the exact sets of their
-//! solids) and complexes (the union with the priority partition of SPEC §3),
+//! solids) and complexes (the union with the priority partition of docs/model.md §3.5),
 //! with every root held exactly so that ties between solids are exact too.
 
 #![deny(missing_docs)]
@@ -342,7 +342,7 @@ pub fn point_at(ray: &Ray, lambda: &Big) -> V3 {
 }
 
 /// `{λ ∈ ℝ : sλ² + 2tλ + u <= 0}`, regularised (isolated points dropped),
-/// ends `None` at infinity. Follows the case table of SPEC §2 exactly.
+/// ends `None` at infinity. Follows the case table of docs/model.md §2.2 exactly.
 fn line_set(s: &Big, t: &Big, u: &Big) -> Vec<(End, End)> {
     let everything = vec![(None, None)];
     if s.signum() == 0 {
@@ -375,7 +375,7 @@ fn line_set(s: &Big, t: &Big, u: &Big) -> Vec<(End, End)> {
 /// The part within `λ >= 0`; an end clipped at the origin is free.
 fn clip_to_ray(set: Vec<(End, End)>) -> Vec<(End, End)> {
     set.into_iter()
-        .filter(|(_, hi)| hi.as_ref().map_or(true, |h| h.signum() > 0))
+        .filter(|(_, hi)| hi.as_ref().is_none_or(|h| h.signum() > 0))
         .map(|(lo, hi)| (lo.filter(|l| l.signum() >= 0), hi))
         .collect()
 }
@@ -690,7 +690,7 @@ impl Scene {
             }
             let mut a = hit;
             let mut b = world((shape.outside)(rng));
-            if !self.crosses(&ray) || aim(o, b).map_or(true, |r| self.crosses(&r)) {
+            if !self.crosses(&ray) || aim(o, b).is_none_or(|r| self.crosses(&r)) {
                 out.push(ray);
                 continue;
             }
