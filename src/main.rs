@@ -131,7 +131,7 @@ struct SizeArgs {
 
 impl SizeArgs {
     /// Applies the overrides to the world's camera.
-    fn apply(&self, world: &mut render::scene::World) -> Result<(), Error> {
+    fn apply(&self, world: &mut render::world::World) -> Result<(), Error> {
         world.camera = world
             .camera
             .resized(self.width, self.height)
@@ -218,9 +218,9 @@ fn run(command: Command) -> Result<(), Error> {
             world.complex.set_precision(precision.into());
             let output = output.unwrap_or_else(|| default_output(&scene));
             // Fail before the render, not after it, if an output cannot be written.
-            render::check_writable(&output)?;
+            render::output::check_writable(&output)?;
             if let Some(p) = &png {
-                render::check_writable(p)?;
+                render::output::check_writable(p)?;
             }
             let rows = u64::from(world.camera.height());
             let bar = std::io::stderr().is_terminal().then(|| {
@@ -284,7 +284,7 @@ fn run(command: Command) -> Result<(), Error> {
             Ok(())
         }
         Command::Schema => {
-            print!("{}", render::schema_json());
+            print!("{}", render::format::schema_json());
             Ok(())
         }
         Command::Bench { scenes, size, threads, precision, runs } => {

@@ -6,7 +6,7 @@ use std::sync::OnceLock;
 
 use proptest::prelude::*;
 use proptest::sample::Index;
-use render::scene::SceneFile;
+use render::format::SceneFile;
 use render::SceneError;
 
 use crate::support::all_scenes;

@@ -164,7 +164,7 @@ pub fn read_exr(path: &Path) -> Option<Exr> {
 }
 
 /// Loads a scene through the library, optionally at another size.
-pub fn world(path: &Path, size: Option<(u32, u32)>) -> render::scene::World {
+pub fn world(path: &Path, size: Option<(u32, u32)>) -> render::world::World {
     let mut w = render::load(path).unwrap();
     if let Some((width, height)) = size {
         w.camera = w.camera.with_size(width, height).unwrap();
@@ -173,7 +173,7 @@ pub fn world(path: &Path, size: Option<(u32, u32)>) -> render::scene::World {
 }
 
 /// Renders in-process.
-pub fn render_frame(world: &render::scene::World) -> render::frame::Frame {
+pub fn render_frame(world: &render::world::World) -> render::frame::Frame {
     render::frame::render(world, render::frame::Options::default(), &|| {}).unwrap().0
 }
 

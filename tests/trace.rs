@@ -28,7 +28,7 @@ fn trace_json(scene_name: &str, o: [f64; 3], d: [f64; 3]) -> Value {
 }
 
 /// The owner of `p` under the priority rule, from point membership alone.
-fn owner(w: &render::scene::World, p: &Point3<f64>) -> Option<u32> {
+fn owner(w: &render::world::World, p: &Point3<f64>) -> Option<u32> {
     let blocks = w.complex.blocks();
     let inside: Vec<usize> =
         (0..blocks.len()).filter(|i| blocks[*i].solids().iter().all(|s| s.value(p) <= 0.0)).collect();

@@ -20,6 +20,8 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+use complex::Precision;
+
 use crate::error::Error;
 
 /// What one benchmark run measured.
@@ -66,7 +68,7 @@ pub fn measure(
     path: &Path,
     size: (Option<u32>, Option<u32>),
     threads: Option<usize>,
-    precision: crate::Precision,
+    precision: Precision,
 ) -> Result<Measurement, Error> {
     measure_runs(path, size, threads, precision, 1)
 }
@@ -80,11 +82,11 @@ pub fn measure_runs(
     path: &Path,
     size: (Option<u32>, Option<u32>),
     threads: Option<usize>,
-    precision: crate::Precision,
+    precision: Precision,
     runs: u32,
 ) -> Result<Measurement, Error> {
     let start = Instant::now();
-    let mut world = crate::load(path)?;
+    let mut world = crate::convert::load(path)?;
     let load = start.elapsed();
     world.complex.set_precision(precision);
     world.camera =

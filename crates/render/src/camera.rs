@@ -3,6 +3,8 @@
 use quadric::nalgebra::{Point3, Vector3};
 use quadric::Ray;
 
+use crate::limits::MAX_PIXELS;
+
 /// Why a camera could not be built.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum CameraError {
@@ -18,8 +20,8 @@ pub enum CameraError {
     /// Width or height is zero.
     #[error("the image size {0}x{1} is empty")]
     EmptyImage(u32, u32),
-    /// More pixels than [`crate::frame::MAX_PIXELS`]; refused before anything is allocated.
-    #[error("the image size {0}x{1} is too large: at most {max} pixels (about 16k x 16k) are supported", max = crate::frame::MAX_PIXELS)]
+    /// More pixels than [`MAX_PIXELS`]; refused before anything is allocated.
+    #[error("the image size {0}x{1} is too large: at most {max} pixels (about 16k x 16k) are supported", max = MAX_PIXELS)]
     TooLarge(u32, u32),
     /// The opening angle is outside (0°, 180°).
     #[error("the aperture must lie strictly between 0 and 180 degrees, got {0}")]
@@ -64,7 +66,7 @@ impl Camera {
         if width == 0 || height == 0 {
             return Err(CameraError::EmptyImage(width, height));
         }
-        if u64::from(width) * u64::from(height) > crate::frame::MAX_PIXELS {
+        if u64::from(width) * u64::from(height) > MAX_PIXELS {
             return Err(CameraError::TooLarge(width, height));
         }
         if !(aperture_degrees > 0.0 && aperture_degrees < 180.0) {

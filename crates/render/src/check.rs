@@ -6,7 +6,7 @@ use std::fmt;
 use complex::BlockId;
 use quadric::nalgebra::Vector3;
 
-use crate::scene::World;
+use crate::world::World;
 
 /// What `check` found.
 #[derive(Clone, Debug, PartialEq)]

@@ -8,9 +8,9 @@ use exr::prelude::{
     SmallVec, WritableImage,
 };
 
+use crate::error::Error;
 use crate::frame::Frame;
 use crate::output::write_atomic;
-use crate::Error;
 
 /// Sample type of the colour channels.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

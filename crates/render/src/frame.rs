@@ -7,9 +7,11 @@ use std::time::{Duration, Instant};
 
 use quadric::nalgebra::Vector3;
 
+use crate::camera::Camera;
 use crate::error::Error;
-use crate::scene::World;
-use crate::shade::{Scratch, Shader};
+use crate::limits::{MAX_PIXELS, MAX_THREADS};
+use crate::shade::{Scratch, Shader, Surface};
+use crate::world::World;
 
 /// One pixel of every output channel (read out of a [`Frame`]'s planes by
 /// [`Frame::at`]).
@@ -259,14 +261,6 @@ pub struct Options {
     pub colour_only: bool,
 }
 
-/// The largest image rendered (2^28 pixels, about 16k × 16k): the frame
-/// (40 bytes a pixel, which the EXR writer takes over as its channels) is
-/// held in memory.
-pub const MAX_PIXELS: u64 = 1 << 28;
-
-/// The most worker threads a render starts.
-pub const MAX_THREADS: usize = 1024;
-
 /// A pool builder for `threads` workers (default: one per core), the count
 /// checked.
 fn pool_builder(threads: Option<usize>) -> Result<rayon::ThreadPoolBuilder, Error> {
@@ -440,7 +434,7 @@ fn render_rows(shader: &Shader, i0: u32, out: &mut [Pixel]) -> u64 {
 /// mean of their colours, the fraction that hit, and the AOVs of the ray
 /// through the centre (SPEC §4). The sub-pixel rays go four at a time
 /// through [`Shader::primary4`], summed in the same order as one by one.
-fn supersampled(shader: &Shader, scratch: &mut Scratch, cam: &crate::camera::Camera, i: u32, j: u32, n: u32) -> Pixel {
+fn supersampled(shader: &Shader, scratch: &mut Scratch, cam: &Camera, i: u32, j: u32, n: u32) -> Pixel {
     // The centre ray only for the AOVs: its colour would not be used.
     let hit = shader.surface(&cam.ray(i, j), scratch);
     let sub = |k: u32| {
@@ -471,7 +465,7 @@ fn supersampled(shader: &Shader, scratch: &mut Scratch, cam: &crate::camera::Cam
 }
 
 /// The pixel of colour `c`, coverage `alpha` and the centre ray's surface `hit`.
-fn pixel_of(c: Vector3<f64>, alpha: f32, hit: Option<crate::shade::Surface>) -> Pixel {
+fn pixel_of(c: Vector3<f64>, alpha: f32, hit: Option<Surface>) -> Pixel {
     let rgb = [c.x as f32, c.y as f32, c.z as f32];
     match hit {
         None => Pixel { rgb, alpha, depth: f32::INFINITY, ..Pixel::default() },

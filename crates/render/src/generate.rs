@@ -14,10 +14,10 @@ use std::f64::consts::PI;
 
 use quadric::nalgebra::Vector3;
 
-use crate::scene::{
-    Axis, CameraSpec, CylinderSpec, Entry, LightSpec, MaterialSpec, Model, ObjectSpec, Scale, SceneFile, Settings,
-    SphereSpec, Step,
+use crate::format::{
+    Axis, CameraSpec, CylinderSpec, Entry, LightSpec, MaterialSpec, ObjectSpec, Scale, SceneFile, SphereSpec, Step,
 };
+use crate::world::{Model, Settings};
 
 fn material(diffuse: [f64; 3], specular: f64, shininess: f64, reflect: f64) -> MaterialSpec {
     MaterialSpec {

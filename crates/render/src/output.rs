@@ -6,7 +6,7 @@ use std::fs::File;
 use std::io::BufWriter;
 use std::path::Path;
 
-use crate::Error;
+use crate::error::Error;
 
 /// The directory a file at `path` goes into.
 fn directory(path: &Path) -> &Path {
@@ -48,7 +48,7 @@ pub fn check_writable(path: &Path) -> Result<(), Error> {
 }
 
 /// Writes `path` through `write`, atomically.
-pub(crate) fn write_atomic(
+pub fn write_atomic(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<&mut File>) -> Result<(), String>,
 ) -> Result<(), Error> {

@@ -2,9 +2,9 @@
 
 use std::path::Path;
 
+use crate::error::Error;
 use crate::frame::Frame;
 use crate::output::write_atomic;
-use crate::Error;
 
 /// The sRGB transfer function of a linear value in [0, 1].
 pub fn srgb(linear: f32) -> f32 {

@@ -26,7 +26,7 @@
 //! ```
 //! let text = r#"{ "camera": { "eye": [0, 0, 5], "direction": [0, 0, -1], "width": 8, "height": 6 },
 //!                 "blocks": [ { "objects": [ { "sphere": { "radius": 2 } } ] } ] }"#;
-//! let world = render::scene::SceneFile::load_str(text).unwrap();
+//! let world = render::format::SceneFile::load_str(text).unwrap();
 //! let pov = render::pov::export(&world, render::pov::PovOptions { mask: true });
 //! assert!(pov.contains("quadric {") && pov.contains("ambient 1 diffuse 0"));
 //! ```
@@ -36,7 +36,7 @@ use std::fmt::Write;
 use quadric::nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 use quadric::{HalfSpace, Quadric, Solid};
 
-use crate::scene::{Material, Model, World};
+use crate::world::{Material, Model, World};
 
 /// What to write.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -11,7 +11,7 @@ use quadric::nalgebra::{Point3, Vector3};
 use quadric::normal::facing;
 use quadric::Ray;
 
-use crate::scene::{Material, Model, World};
+use crate::world::{Material, Model, World};
 
 /// Colours are linear RGB in `f64` while shading.
 pub type Rgb = Vector3<f64>;

@@ -7,8 +7,8 @@ use quadric::nalgebra::{Point3, Vector3};
 use quadric::Ray;
 use serde::Serialize;
 
-use crate::scene::World;
-use crate::Error;
+use crate::error::Error;
+use crate::world::World;
 
 /// A block's interval set along the ray.
 #[derive(Clone, Debug, PartialEq, Serialize)]

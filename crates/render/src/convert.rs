@@ -1,0 +1,212 @@
+//! The scene file into the world: the camera, settings, lights and
+//! materials checked and resolved, the blocks flattened (`flatten`) and the
+//! complex built. Every error names its place in the file, with a line and
+//! column when the text is at hand.
+
+use std::path::Path;
+
+use complex::{Block, Complex, ComplexOptions};
+use quadric::nalgebra::{Point3, Vector3};
+
+use crate::camera::Camera;
+use crate::error::{Error, SceneError};
+use crate::flatten::{finite_triple, vec3};
+use crate::format::SceneFile;
+use crate::limits::MAX_BOUNCES;
+use crate::world::{BlockInfo, Light, Material, Model, Settings, Triple, World};
+
+/// Reads and converts a scene file.
+pub fn load(path: &Path) -> Result<World, Error> {
+    let bytes = std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let scene_error = |source| Error::Scene { file: path.to_path_buf(), source };
+    // Bad encoding is bad input (exit 1), located like a syntax error.
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let valid = std::str::from_utf8(valid).unwrap_or_default();
+        let line = valid.matches('\n').count() + 1;
+        let column = valid.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        let byte = e.as_bytes()[e.utf8_error().valid_up_to()];
+        let message = format!("the file is not UTF-8 (byte 0x{byte:02x})");
+        scene_error(SceneError::Parse { path: String::new(), line, column, message })
+    })?;
+    SceneFile::load_str(&text).map_err(scene_error)
+}
+
+/// A colour or reflectance: finite and not negative (negative light or
+/// reflectance has no physical meaning and would subtract light).
+fn colour(t: &Triple, place: &str, what: &str) -> Result<(), SceneError> {
+    finite_triple(t, place, what)?;
+    if t.iter().any(|c| *c < 0.0) {
+        return Err(SceneError::semantic(place, format!("{what} must not be negative, got {t:?}")));
+    }
+    Ok(())
+}
+
+impl SceneFile {
+    /// Parses and converts a scene; every error carries its place with a
+    /// line and column.
+    pub fn load_str(text: &str) -> Result<World, SceneError> {
+        // The parsed document is dropped before the complex is built, so
+        // that the build's allocations can take the memory it frees instead
+        // of fresh pages (a 100,000-block scene's parsed entries are about
+        // a fifth of the load's memory).
+        let scene = Self::from_json(text)?;
+        let parts = scene.world_parts().map_err(|e| e.located(text))?;
+        drop(scene);
+        parts.build().map_err(|e| e.located(text))
+    }
+
+    /// Resolves names, composes transforms and builds the complex.
+    pub fn to_world(&self) -> Result<World, SceneError> {
+        self.world_parts()?.build()
+    }
+
+    // Everything of `to_world` but the complex: checks the camera, settings,
+    // lights and materials and flattens the blocks.
+    fn world_parts(&self) -> Result<WorldParts, SceneError> {
+        let c = &self.camera;
+        finite_triple(&c.eye, "camera.eye", "the eye")?;
+        finite_triple(&c.direction, "camera.direction", "the direction")?;
+        finite_triple(&c.up, "camera.up", "the up vector")?;
+        let camera =
+            Camera::new(Point3::from(vec3(c.eye)), vec3(c.direction), vec3(c.up), c.width, c.height, c.aperture)
+                .map_err(|e| SceneError::semantic("camera", e.to_string()))?;
+
+        let s = &self.settings;
+        colour(&s.ambient, "settings.ambient", "the ambient light")?;
+        colour(&s.background, "settings.background", "the background")?;
+        if s.max_depth > MAX_BOUNCES {
+            return Err(SceneError::semantic(
+                "settings.max_depth",
+                format!("must be at most {MAX_BOUNCES}, got {}", s.max_depth),
+            ));
+        }
+        if let Some(e) = s.epsilon {
+            if !(e.is_finite() && e >= 0.0) {
+                return Err(SceneError::semantic("settings.epsilon", format!("must be finite and >= 0, got {e}")));
+            }
+        }
+
+        if !(1..=16).contains(&s.samples) {
+            return Err(SceneError::semantic(
+                "settings.samples",
+                format!("must be between 1 and 16, got {}", s.samples),
+            ));
+        }
+
+        let mut lights = Vec::with_capacity(self.lights.len());
+        for (i, l) in self.lights.iter().enumerate() {
+            let place = format!("lights[{i}]");
+            finite_triple(&l.position, &place, "the position")?;
+            let base = l.color.unwrap_or([1.0; 3]);
+            let diffuse = l.diffuse.unwrap_or(base);
+            let specular = l.specular.unwrap_or(base);
+            colour(&diffuse, &place, "the colour")?;
+            colour(&specular, &place, "the colour")?;
+            lights.push(Light {
+                position: Point3::from(vec3(l.position)),
+                diffuse: vec3(diffuse),
+                specular: vec3(specular),
+            });
+        }
+
+        let mut materials = Vec::with_capacity(self.materials.len() + 1);
+        for (name, m) in &self.materials {
+            let place = format!("materials{}", crate::locate::key_step(name));
+            for (t, what) in [
+                (&m.ambient, "ambient"),
+                (&m.diffuse, "diffuse"),
+                (&m.specular, "specular"),
+                (&m.reflect, "reflect"),
+                (&m.transmit, "transmit"),
+            ] {
+                colour(t, &format!("{place}.{what}"), what)?;
+            }
+            if !(m.shininess.is_finite() && m.shininess >= 0.0) {
+                let msg = format!("shininess must be finite and >= 0, got {}", m.shininess);
+                return Err(SceneError::semantic(&format!("{place}.shininess"), msg));
+            }
+            if !(m.ior.is_finite() && m.ior > 0.0) {
+                let msg = format!("ior must be finite and > 0, got {}", m.ior);
+                return Err(SceneError::semantic(&format!("{place}.ior"), msg));
+            }
+            materials.push(Material {
+                name: name.clone(),
+                ambient: vec3(m.ambient),
+                diffuse: vec3(m.diffuse),
+                specular: vec3(m.specular),
+                shininess: m.shininess,
+                model: m.model,
+                reflect: vec3(m.reflect),
+                transmit: vec3(m.transmit),
+                ior: m.ior,
+            });
+        }
+        // Blocks without a material get a plain grey one, appended last so
+        // that the named materials keep their (sorted) indices.
+        let default_material = materials.len();
+        materials.push(Material {
+            name: "(default)".into(),
+            ambient: Vector3::repeat(0.8),
+            diffuse: Vector3::repeat(0.8),
+            specular: Vector3::zeros(),
+            shininess: 32.0,
+            model: Model::Phong,
+            reflect: Vector3::zeros(),
+            transmit: Vector3::zeros(),
+            ior: 1.0,
+        });
+
+        let (blocks, infos) = self.flattened(default_material)?;
+        if blocks.is_empty() {
+            return Err(SceneError::semantic("blocks", "the scene has no blocks"));
+        }
+        Ok(WorldParts { camera, settings: s.clone(), lights, materials, blocks, infos })
+    }
+}
+
+// A world but for its complex (`SceneFile::world_parts`).
+struct WorldParts {
+    camera: Camera,
+    settings: Settings,
+    lights: Vec<Light>,
+    materials: Vec<Material>,
+    blocks: Vec<Block>,
+    infos: Vec<BlockInfo>,
+}
+
+impl WorldParts {
+    // Builds the complex: the last step of `SceneFile::to_world`.
+    fn build(self) -> Result<World, SceneError> {
+        let WorldParts { camera, settings, lights, materials, blocks, infos } = self;
+        let complex = Complex::new(blocks, ComplexOptions { epsilon: settings.epsilon })
+            .map_err(|e| SceneError::semantic("blocks", e.to_string()))?;
+        Ok(World::new(camera, settings, lights, materials, complex, infos))
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    const CAMERA: &str = r#""camera": { "eye": [0, 0, 50], "direction": [0, 0, -1], "width": 4, "height": 3 }"#;
+
+    #[test]
+    fn lights_split_colour_into_diffuse_and_specular() {
+        let text = format!(
+            r#"{{ {CAMERA}, "lights": [ {{ "position": [0, 0, 0], "color": [0.5, 0.5, 0.5], "specular": [1, 0, 0] }} ],
+                 "blocks": [ {{ "objects": [ {{ "sphere": {{}} }} ] }} ] }}"#
+        );
+        let w = SceneFile::from_json(&text).unwrap().to_world().unwrap();
+        assert_eq!(w.lights[0].diffuse, Vector3::repeat(0.5));
+        assert_eq!(w.lights[0].specular, Vector3::new(1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn schema_key_is_allowed() {
+        let text =
+            format!(r#"{{ "$schema": "x", {CAMERA}, "blocks": [ {{ "objects": [ {{ "sphere": {{}} }} ] }} ] }}"#);
+        assert!(SceneFile::from_json(&text).unwrap().to_world().is_ok());
+    }
+}

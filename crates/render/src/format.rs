@@ -1,0 +1,420 @@
+//! The scene file: the serde types of the JSON document, the only place
+//! that knows JSON, and its JSON Schema. The document converts into a
+//! [`World`](crate::world::World) (`SceneFile::to_world`); the settings
+//! and specular models are the world's own types, read as they are.
+
+use std::collections::BTreeMap;
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use crate::error::SceneError;
+use crate::world::{Model, Settings, Triple};
+
+/// The whole scene document.
+///
+/// ```
+/// use render::format::SceneFile;
+/// let text = r#"{ "camera": { "eye": [0, 0, 4], "direction": [0, 0, -1] },
+///                 "blocks": [ { "name": "ball", "objects": [ { "sphere": {} } ] } ] }"#;
+/// let world = SceneFile::load_str(text).unwrap();
+/// assert_eq!(world.complex.blocks()[0].name(), "ball");
+///
+/// let typo = text.replace("\"sphere\"", "\"spehre\"");
+/// let err = SceneFile::load_str(&typo).unwrap_err().to_string();
+/// assert!(err.contains("blocks[0].objects[0].spehre") && err.contains("did you mean `sphere`?"), "{err}");
+/// ```
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+// The doc comment's example must not end up in the JSON Schema.
+#[schemars(description = "The whole scene document.")]
+pub struct SceneFile {
+    /// Optional URL or path of the JSON Schema, for editors. Ignored.
+    #[serde(rename = "$schema", default, skip_serializing_if = "Option::is_none")]
+    pub schema: Option<String>,
+    /// The camera (SPEC §4).
+    pub camera: CameraSpec,
+    /// Global rendering settings.
+    #[serde(default)]
+    pub settings: Settings,
+    /// Point lights.
+    #[serde(default)]
+    pub lights: Vec<LightSpec>,
+    /// Named materials, referenced by blocks and objects.
+    #[serde(default)]
+    pub materials: BTreeMap<String, MaterialSpec>,
+    /// Blocks and groups in priority order (earlier blocks win where
+    /// transparent blocks overlap).
+    pub blocks: Vec<Entry>,
+}
+
+/// The pinhole camera of SPEC §4.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    /// The eye point `E`.
+    pub eye: Triple,
+    /// The viewing direction `D` (need not be unit length).
+    pub direction: Triple,
+    /// The up vector `U`; only its part orthogonal to `direction` counts.
+    #[serde(default = "default_up")]
+    pub up: Triple,
+    /// Image width in pixels.
+    #[serde(default = "default_width")]
+    pub width: u32,
+    /// Image height in pixels.
+    #[serde(default = "default_height")]
+    pub height: u32,
+    /// Opening angle in degrees, measured on the image diagonal.
+    #[serde(default = "default_aperture")]
+    pub aperture: f64,
+}
+
+fn default_up() -> Triple {
+    [0.0, 1.0, 0.0]
+}
+fn default_width() -> u32 {
+    640
+}
+fn default_height() -> u32 {
+    480
+}
+fn default_aperture() -> f64 {
+    50.0
+}
+
+/// A point light.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LightSpec {
+    /// Where the light is.
+    pub position: Triple,
+    /// Sets both the diffuse and the specular colour (default white).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<Triple>,
+    /// Diffuse colour `Ld`; overrides `color`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diffuse: Option<Triple>,
+    /// Specular colour `Ls`; overrides `color`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub specular: Option<Triple>,
+}
+
+/// A surface material (SPEC §5).
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// Ambient reflectance `Ma`.
+    #[serde(default)]
+    pub ambient: Triple,
+    /// Diffuse reflectance `Md`.
+    #[serde(default)]
+    pub diffuse: Triple,
+    /// Specular reflectance `Ms`.
+    #[serde(default)]
+    pub specular: Triple,
+    /// Specular exponent `p`.
+    #[serde(default = "default_shininess")]
+    pub shininess: f64,
+    /// `phong` or `blinn-phong`.
+    #[serde(default)]
+    pub model: Model,
+    /// Mirror reflection weight `kr`.
+    #[serde(default)]
+    pub reflect: Triple,
+    /// Transmission weight `kt` (used on transparent blocks).
+    #[serde(default)]
+    pub transmit: Triple,
+    /// Index of refraction of the medium (transparent blocks).
+    #[serde(default = "default_ior")]
+    pub ior: f64,
+}
+
+fn default_shininess() -> f64 {
+    32.0
+}
+fn default_ior() -> f64 {
+    1.0
+}
+
+/// One step of a transform list.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum Step {
+    /// Translation by `[x, y, z]`.
+    Translate(Triple),
+    /// Uniform (`s`) or per-axis (`[sx, sy, sz]`) scaling.
+    Scale(Scale),
+    /// Rotation about x in degrees (y towards z).
+    RotateX(f64),
+    /// Rotation about y in degrees (z towards x).
+    RotateY(f64),
+    /// Rotation about z in degrees (x towards y).
+    RotateZ(f64),
+    /// A general affine 4x4 matrix, row-major, last row `[0, 0, 0, 1]`.
+    // Boxed: inline, it would make every step 136 bytes instead of 32.
+    Matrix(Box<[[f64; 4]; 4]>),
+}
+
+/// A scale factor: one number or one per axis.
+#[derive(Clone, Debug, Serialize, JsonSchema)]
+#[serde(untagged)]
+pub enum Scale {
+    /// The same factor on every axis.
+    Uniform(f64),
+    /// One factor per axis.
+    PerAxis(Triple),
+}
+
+// Read by a visitor of its own rather than serde's `untagged` (which the
+// schema and the serialisation still follow): `untagged` buffers every value
+// and builds, formats and drops an error for each array it tries as a number
+// first (33,000 per-axis scales in the 100,000-block grid: 1.2 % of its
+// load's instructions). Errors name what `scale` takes.
+impl<'de> Deserialize<'de> for Scale {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Factors;
+        impl<'de> serde::de::Visitor<'de> for Factors {
+            type Value = Scale;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number or an array [sx, sy, sz]")
+            }
+
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Scale, E> {
+                Ok(Scale::Uniform(v))
+            }
+
+            // JSON integers arrive as these; converted as serde's `f64` does.
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Scale, E> {
+                Ok(Scale::Uniform(v as f64))
+            }
+
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Scale, E> {
+                Ok(Scale::Uniform(v as f64))
+            }
+
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Scale, A::Error> {
+                let mut v = [0.0; 3];
+                for (i, x) in v.iter_mut().enumerate() {
+                    *x = seq.next_element()?.ok_or_else(|| serde::de::Error::invalid_length(i, &self))?;
+                }
+                let mut more = 0;
+                while seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                    more += 1;
+                }
+                if more > 0 {
+                    return Err(serde::de::Error::invalid_length(3 + more, &self));
+                }
+                Ok(Scale::PerAxis(v))
+            }
+        }
+        deserializer.deserialize_any(Factors)
+    }
+}
+
+/// An entry of a `blocks` list: a block (with `objects`) or a group (with
+/// `group` and nested `blocks`).
+#[derive(Clone, Debug, Default, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Entry {
+    /// The block's name (blocks only; default `block N`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The block's material name (blocks only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
+    /// Whether the block is transparent (blocks only; default false).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transparent: Option<bool>,
+    /// The solids whose intersection is the block (blocks only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub objects: Option<Vec<ObjectSpec>>,
+    /// The group's name (groups only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub group: Option<String>,
+    /// Nested blocks and groups (groups only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blocks: Option<Vec<Entry>>,
+    /// Steps applied after the objects' own transforms (blocks) or after
+    /// everything inside (groups).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub transform: Vec<Step>,
+}
+
+/// Options of a sphere; `{}` is the unit ball.
+#[derive(Clone, Debug, Default, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SphereSpec {
+    /// Radius (default 1), applied before `transform`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    /// Centre (default origin), applied before `transform`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center: Option<Triple>,
+}
+
+/// The axis of a cylinder.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum Axis {
+    /// Along x.
+    X,
+    /// Along y.
+    #[default]
+    Y,
+    /// Along z.
+    Z,
+}
+
+/// Options of a cylinder; `{}` is the infinite unit tube along y.
+#[derive(Clone, Debug, Default, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CylinderSpec {
+    /// Radius (default 1), applied before `transform`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    /// Axis (default `y`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis: Option<Axis>,
+}
+
+/// Options of shapes without parameters (`{}`).
+#[derive(Clone, Debug, Default, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Empty {}
+
+/// Options of a hyperboloid.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct HyperboloidSpec {
+    /// 1: `x² − y² + z² ≤ 1` (waisted tube); 2: `x² − y² + z² ≤ −1` (two bowls).
+    pub sheets: u8,
+}
+
+/// One solid of a block: exactly one shape key plus options.
+#[derive(Clone, Debug, Default, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+// Scenes hold hundreds of thousands of these, so the larger, rarer shape
+// options are boxed: 120 bytes instead of 256 (the JSON is the same).
+pub struct ObjectSpec {
+    /// The unit sphere `x² + y² + z² ≤ 1`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sphere: Option<Box<SphereSpec>>,
+    /// The infinite unit tube along y, `x² + z² ≤ 1`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cylinder: Option<Box<CylinderSpec>>,
+    /// The double cone `x² − y² + z² ≤ 0`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cone: Option<Empty>,
+    /// The paraboloid `x² + z² − y ≤ 0`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub paraboloid: Option<Empty>,
+    /// A hyperboloid of one or two sheets around y.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hyperboloid: Option<HyperboloidSpec>,
+    /// Raw coefficients `[a, b, c, d, e, f, g, h, j, k]` of
+    /// `a x² + b y² + c z² + 2d xy + 2e xz + 2f yz + 2g x + 2h y + 2j z + k ≤ 0`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quadric: Option<Box<[f64; 10]>>,
+    /// The half-space `a x + b y + c z + d ≤ 0`, given as `[a, b, c, d]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub halfspace: Option<[f64; 4]>,
+    /// Steps placing the solid, applied in list order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub transform: Vec<Step>,
+    /// Whether to take the outside of the solid instead.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub complement: bool,
+    /// Material of this surface (default: the block's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
+}
+
+impl SceneFile {
+    /// Parses a scene from JSON text. Errors carry the JSON path and the
+    /// line and column.
+    pub fn from_json(text: &str) -> Result<Self, SceneError> {
+        // Tracking the path costs about a third of the parse, and only an
+        // error needs it: a failed parse is run again with the tracker, which
+        // stops at the same place with the same error.
+        if let Ok(scene) = SceneFile::deserialize(&mut serde_json::Deserializer::from_str(text)) {
+            return Ok(scene);
+        }
+        let de = &mut serde_json::Deserializer::from_str(text);
+        let scene: SceneFile = serde_path_to_error::deserialize(de).map_err(SceneError::from_json)?;
+        Ok(scene)
+    }
+}
+
+/// The JSON Schema (draft-07) of the scene format, pretty-printed.
+///
+/// Generated from the serde types, plus the two rules the types cannot
+/// express: an object has exactly one shape key, and a `blocks` entry is
+/// either a block (`objects`) or a group (`group` and `blocks`).
+pub fn schema_json() -> String {
+    let schema = schemars::schema_for!(SceneFile);
+    let mut value = serde_json::to_value(&schema).unwrap_or_default();
+    let one_of = |alternatives: &[&[&str]]| {
+        serde_json::Value::Array(alternatives.iter().map(|keys| serde_json::json!({ "required": keys })).collect())
+    };
+    if let Some(defs) = value.get_mut("definitions").and_then(|d| d.as_object_mut()) {
+        if let Some(obj) = defs.get_mut("ObjectSpec").and_then(|o| o.as_object_mut()) {
+            let shapes: Vec<&[&str]> = vec![
+                &["sphere"],
+                &["cylinder"],
+                &["cone"],
+                &["paraboloid"],
+                &["hyperboloid"],
+                &["quadric"],
+                &["halfspace"],
+            ];
+            obj.insert("oneOf".into(), one_of(&shapes));
+        }
+        if let Some(entry) = defs.get_mut("Entry").and_then(|o| o.as_object_mut()) {
+            entry.insert("oneOf".into(), one_of(&[&["objects"], &["group", "blocks"]]));
+        }
+    }
+    // Serialising a JSON value cannot fail.
+    let mut s = serde_json::to_string_pretty(&value).unwrap_or_default();
+    s.push('\n');
+    s
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scale_reads_a_number_or_three_and_refuses_the_rest() {
+        let read = |json: &str| serde_json::from_str::<Scale>(json).map_err(|e| e.to_string());
+        assert!(matches!(read("2"), Ok(Scale::Uniform(s)) if s == 2.0));
+        assert!(matches!(read("-0.5"), Ok(Scale::Uniform(s)) if s == -0.5));
+        assert!(matches!(read("18446744073709551615"), Ok(Scale::Uniform(s)) if s == u64::MAX as f64));
+        assert!(matches!(read("[1, 2.5, -3]"), Ok(Scale::PerAxis(v)) if v == [1.0, 2.5, -3.0]));
+        for (json, want) in [
+            ("[]", "invalid length 0, expected a number or an array [sx, sy, sz]"),
+            ("[1, 2]", "invalid length 2, expected a number or an array [sx, sy, sz]"),
+            ("[1, 2, 3, 4]", "invalid length 4, expected a number or an array [sx, sy, sz]"),
+            ("[1, 2, 3, 4, [5], {}]", "invalid length 6, expected a number or an array [sx, sy, sz]"),
+            ("\"x\"", "invalid type: string \"x\", expected a number or an array [sx, sy, sz]"),
+            ("{}", "invalid type: map, expected a number or an array [sx, sy, sz]"),
+            ("[1, true, 3]", "invalid type: boolean `true`, expected f64"),
+        ] {
+            let got = read(json).err().unwrap_or_default();
+            assert!(got.starts_with(want), "{json}: {got}");
+        }
+        // Written back as it is read.
+        for json in ["2.0", "[1.0,2.5,-3.0]"] {
+            assert_eq!(serde_json::to_string(&read(json).unwrap()).unwrap(), json);
+        }
+    }
+
+    #[test]
+    fn object_specs_stay_small() {
+        // A large scene holds one per solid; see the comment on `ObjectSpec`.
+        assert!(std::mem::size_of::<ObjectSpec>() <= 120, "{}", std::mem::size_of::<ObjectSpec>());
+        assert!(std::mem::size_of::<Step>() <= 32, "{}", std::mem::size_of::<Step>());
+    }
+}
