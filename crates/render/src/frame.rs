@@ -10,7 +10,7 @@ use quadric::nalgebra::Vector3;
 use crate::camera::Camera;
 use crate::error::Error;
 use crate::limits::{MAX_PIXELS, MAX_THREADS};
-use crate::shade::{Scratch, Shader, Surface};
+use crate::shade::{PrimaryHit, Scratch, Shader};
 use crate::world::World;
 
 /// One pixel of every output channel (read out of a [`Frame`]'s planes by
@@ -436,7 +436,7 @@ fn render_rows(shader: &Shader, i0: u32, out: &mut [Pixel]) -> u64 {
 /// through [`Shader::primary4`], summed in the same order as one by one.
 fn supersampled(shader: &Shader, scratch: &mut Scratch, cam: &Camera, i: u32, j: u32, n: u32) -> Pixel {
     // The centre ray only for the AOVs: its colour would not be used.
-    let hit = shader.surface(&cam.ray(i, j), scratch);
+    let hit = shader.primary_hit(&cam.ray(i, j), scratch);
     let sub = |k: u32| {
         let (a, b) = (k / n, k % n);
         let di = (f64::from(a) + 0.5) / f64::from(n) - 0.5;
@@ -464,8 +464,8 @@ fn supersampled(shader: &Shader, scratch: &mut Scratch, cam: &Camera, i: u32, j:
     pixel_of(c, (f64::from(covered) / f64::from(count)) as f32, hit)
 }
 
-/// The pixel of colour `c`, coverage `alpha` and the centre ray's surface `hit`.
-fn pixel_of(c: Vector3<f64>, alpha: f32, hit: Option<Surface>) -> Pixel {
+/// The pixel of colour `c`, coverage `alpha` and the centre ray's `hit`.
+fn pixel_of(c: Vector3<f64>, alpha: f32, hit: Option<PrimaryHit>) -> Pixel {
     let rgb = [c.x as f32, c.y as f32, c.z as f32];
     match hit {
         None => Pixel { rgb, alpha, depth: f32::INFINITY, ..Pixel::default() },

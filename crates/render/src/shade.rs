@@ -16,9 +16,10 @@ use crate::world::{Material, Model, World};
 /// Colours are linear RGB in `f64` while shading.
 pub type Rgb = Vector3<f64>;
 
-/// What the primary ray saw, for the AOVs.
+/// What the primary ray saw, for the AOVs: where it first met a visible
+/// surface, and which block and solid that surface belongs to.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Surface {
+pub struct PrimaryHit {
     /// Distance along the ray.
     pub t: f64,
     /// World-space unit normal facing the camera (zero where undefined).
@@ -109,26 +110,26 @@ impl<'w> Shader<'w> {
         self.world
     }
 
-    /// The colour seen along a primary ray and the surface it hit.
-    pub fn primary(&self, ray: &Ray, scratch: &mut Scratch) -> (Rgb, Option<Surface>) {
+    /// The colour seen along a primary ray and what it hit.
+    pub fn primary(&self, ray: &Ray, scratch: &mut Scratch) -> (Rgb, Option<PrimaryHit>) {
         match self.first_event(ray, scratch) {
             None => (self.background(), None),
-            Some(e) => (self.shade(ray, &e, 0, 1.0, scratch), Some(e.surface(ray))),
+            Some(e) => (self.shade(ray, &e, 0, 1.0, scratch), Some(e.primary_hit(ray))),
         }
     }
 
-    /// The surface a primary ray hits, unshaded: [`Shader::primary`]'s
-    /// surface without its colour (the AOVs of a supersampled pixel, whose
-    /// colour comes from its sub-pixel rays).
-    pub fn surface(&self, ray: &Ray, scratch: &mut Scratch) -> Option<Surface> {
-        self.first_event(ray, scratch).map(|e| e.surface(ray))
+    /// What a primary ray hits, unshaded: [`Shader::primary`]'s hit
+    /// without its colour (the AOVs of a supersampled pixel, whose colour
+    /// comes from its sub-pixel rays).
+    pub fn primary_hit(&self, ray: &Ray, scratch: &mut Scratch) -> Option<PrimaryHit> {
+        self.first_event(ray, scratch).map(|e| e.primary_hit(ray))
     }
 
     /// [`Shader::primary`] of four rays: in a scene without transparent
     /// blocks their first hits come from one shared BVH walk
-    /// ([`complex::Complex::cast_rays`]); the colours and surfaces are
-    /// exactly those of four `primary` calls.
-    pub fn primary4(&self, rays: &[Ray; 4], scratch: &mut Scratch) -> [(Rgb, Option<Surface>); 4] {
+    /// ([`complex::Complex::cast_rays`]); the colours and hits are exactly
+    /// those of four `primary` calls.
+    pub fn primary4(&self, rays: &[Ray; 4], scratch: &mut Scratch) -> [(Rgb, Option<PrimaryHit>); 4] {
         if self.transparent {
             return rays.each_ref().map(|r| self.primary(r, scratch));
         }
@@ -138,7 +139,7 @@ impl<'w> Shader<'w> {
             None => (self.background(), None),
             Some(h) => {
                 let e = Event::of_hit(&h);
-                (self.shade(&rays[k], &e, 0, 1.0, scratch), Some(e.surface(&rays[k])))
+                (self.shade(&rays[k], &e, 0, 1.0, scratch), Some(e.primary_hit(&rays[k])))
             }
         })
     }
@@ -343,8 +344,8 @@ impl<'w> Shader<'w> {
 
 impl Event {
     /// What a primary ray reports of this event for the AOVs.
-    fn surface(&self, ray: &Ray) -> Surface {
-        Surface {
+    fn primary_hit(&self, ray: &Ray) -> PrimaryHit {
+        PrimaryHit {
             t: self.t,
             normal: facing_normal(&self.normal, &ray.direction()),
             block: self.block,
