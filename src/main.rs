@@ -30,47 +30,9 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene to OpenEXR (and optionally a PNG preview).
-    Render {
-        /// The scene file (JSON).
-        scene: PathBuf,
-        /// Output EXR file [default: the scene's stem + .exr in the current directory].
-        #[arg(short, long, value_name = "OUT.exr")]
-        output: Option<PathBuf>,
-        /// Also write an sRGB PNG preview.
-        #[arg(long, value_name = "OUT.png")]
-        png: Option<PathBuf>,
-        #[command(flatten)]
-        size: SizeArgs,
-        /// Worker threads [default: one per core].
-        #[arg(long, value_name = "N")]
-        threads: Option<usize>,
-        /// Precision mode of the kernel (docs/accuracy.md).
-        #[arg(long, value_enum, default_value_t = PrecisionArg::Accurate)]
-        precision: PrecisionArg,
-        /// Anti-aliasing: an N×N grid of rays per pixel (overrides settings.samples).
-        #[arg(long, value_name = "N")]
-        samples: Option<u32>,
-        /// Write the colour channels as 16-bit half floats.
-        #[arg(long)]
-        half: bool,
-        /// Exposure of the PNG preview in stops (pixel values are scaled by 2^E).
-        #[arg(long, value_name = "E", default_value_t = 0.0, allow_negative_numbers = true)]
-        exposure: f32,
-    },
+    Render(RenderArgs),
     /// Trace one ray and print every block's intervals, the partition and the first hit.
-    Trace {
-        /// The scene file (JSON).
-        scene: PathBuf,
-        /// Ray origin.
-        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true, required = true)]
-        origin: Vec<f64>,
-        /// Ray direction (normalised before use).
-        #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true, required = true)]
-        direction: Vec<f64>,
-        /// Print JSON instead of text.
-        #[arg(long)]
-        json: bool,
-    },
+    Trace(TraceArgs),
     /// Validate a scene and print a summary with warnings.
     Check {
         /// The scene file (JSON).
@@ -79,43 +41,99 @@ enum Command {
     /// Print the JSON Schema (draft-07) of the scene format.
     Schema,
     /// Write the scene for POV-Ray 3.7 (for comparison renders).
-    ExportPov {
-        /// The scene file (JSON).
-        scene: PathBuf,
-        /// Output .pov file [default: stdout].
-        #[arg(short, long, value_name = "OUT.pov")]
-        output: Option<PathBuf>,
-        /// Flat block colours encoding the 1-based block id (an id mask), no lights.
-        #[arg(long)]
-        mask: bool,
-        #[command(flatten)]
-        size: SizeArgs,
-    },
+    ExportPov(ExportPovArgs),
     /// Render scenes once each and print rays per second (primary and all rays).
-    Bench {
-        /// The scene files (JSON).
-        #[arg(required = true)]
-        scenes: Vec<PathBuf>,
-        #[command(flatten)]
-        size: SizeArgs,
-        /// Worker threads [default: one per core].
-        #[arg(long, value_name = "N")]
-        threads: Option<usize>,
-        /// Precision mode of the kernel (docs/accuracy.md).
-        #[arg(long, value_enum, default_value_t = PrecisionArg::Accurate)]
-        precision: PrecisionArg,
-        /// Renders per scene (loaded once): the render time is the fastest, the median is printed too.
-        #[arg(long, value_name = "R", default_value_t = 1)]
-        runs: u32,
-    },
+    Bench(BenchArgs),
     /// Write a benchmark scene (JSON).
-    Generate {
-        #[command(subcommand)]
-        kind: Generator,
-        /// Output file [default: stdout].
-        #[arg(short, long, value_name = "OUT.json", global = true)]
-        output: Option<PathBuf>,
-    },
+    Generate(GenerateArgs),
+}
+
+// The argument structs carry no doc comment of their own: the variant's
+// is the command's help.
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// The scene file (JSON).
+    scene: PathBuf,
+    /// Output EXR file [default: the scene's stem + .exr in the current directory].
+    #[arg(short, long, value_name = "OUT.exr")]
+    output: Option<PathBuf>,
+    /// Also write an sRGB PNG preview.
+    #[arg(long, value_name = "OUT.png")]
+    png: Option<PathBuf>,
+    #[command(flatten)]
+    size: SizeArgs,
+    /// Worker threads [default: one per core].
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
+    /// Precision mode of the kernel (docs/accuracy.md).
+    #[arg(long, value_enum, default_value_t = PrecisionArg::Accurate)]
+    precision: PrecisionArg,
+    /// Anti-aliasing: an N×N grid of rays per pixel (overrides settings.samples).
+    #[arg(long, value_name = "N")]
+    samples: Option<u32>,
+    /// Write the colour channels as 16-bit half floats.
+    #[arg(long)]
+    half: bool,
+    /// Exposure of the PNG preview in stops (pixel values are scaled by 2^E).
+    #[arg(long, value_name = "E", default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+}
+
+#[derive(clap::Args)]
+struct TraceArgs {
+    /// The scene file (JSON).
+    scene: PathBuf,
+    /// Ray origin.
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true, required = true)]
+    origin: Vec<f64>,
+    /// Ray direction (normalised before use).
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true, required = true)]
+    direction: Vec<f64>,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(clap::Args)]
+struct ExportPovArgs {
+    /// The scene file (JSON).
+    scene: PathBuf,
+    /// Output .pov file [default: stdout].
+    #[arg(short, long, value_name = "OUT.pov")]
+    output: Option<PathBuf>,
+    /// Flat block colours encoding the 1-based block id (an id mask), no lights.
+    #[arg(long)]
+    mask: bool,
+    #[command(flatten)]
+    size: SizeArgs,
+}
+
+#[derive(clap::Args)]
+struct BenchArgs {
+    /// The scene files (JSON).
+    #[arg(required = true)]
+    scenes: Vec<PathBuf>,
+    #[command(flatten)]
+    size: SizeArgs,
+    /// Worker threads [default: one per core].
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
+    /// Precision mode of the kernel (docs/accuracy.md).
+    #[arg(long, value_enum, default_value_t = PrecisionArg::Accurate)]
+    precision: PrecisionArg,
+    /// Renders per scene (loaded once): the render time is the fastest, the median is printed too.
+    #[arg(long, value_name = "R", default_value_t = 1)]
+    runs: u32,
+}
+
+#[derive(clap::Args)]
+struct GenerateArgs {
+    #[command(subcommand)]
+    kind: Generator,
+    /// Output file [default: stdout].
+    #[arg(short, long, value_name = "OUT.json", global = true)]
+    output: Option<PathBuf>,
 }
 
 /// `--width`/`--height`, shared by the commands that make an image.
@@ -201,156 +219,175 @@ fn triple(v: &[f64]) -> [f64; 3] {
 
 fn run(command: Command) -> Result<(), Error> {
     match command {
-        Command::Render { scene, output, png, size, threads, precision, samples, half, exposure } => {
-            render::frame::set_global_threads(threads)?;
-            let cancel = interrupt_flag();
-            if !exposure.is_finite() {
-                return Err(Error::Options(format!("--exposure must be a finite number of stops, got {exposure}")));
-            }
-            let mut world = render::load(&scene)?;
-            if let Some(n) = samples {
-                if !(1..=16).contains(&n) {
-                    return Err(Error::Options(format!("--samples must be between 1 and 16, got {n}")));
-                }
-                world.settings.samples = n;
-            }
-            size.apply(&mut world)?;
-            world.complex.set_precision(precision.into());
-            let output = output.unwrap_or_else(|| default_output(&scene));
-            // Fail before the render, not after it, if an output cannot be written.
-            render::output::check_writable(&output)?;
-            if let Some(p) = &png {
-                render::output::check_writable(p)?;
-            }
-            let rows = u64::from(world.camera.height());
-            let bar = std::io::stderr().is_terminal().then(|| {
-                let bar = indicatif::ProgressBar::new(rows);
-                if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rows {elapsed}") {
-                    bar.set_style(style);
-                }
-                bar
-            });
-            let tick = || {
-                if let Some(b) = &bar {
-                    b.inc(1);
-                }
-            };
-            let (frame, stats) = render::frame::render_until(
-                &world,
-                render::frame::Options { threads, colour_only: false },
-                &tick,
-                &cancel,
-            )?;
-            if let Some(b) = &bar {
-                b.finish_and_clear();
-            }
-            // A Ctrl-C from here on lets the (short) writing finish, so the
-            // files on disk are both old or both new.
-            if cancel.load(Ordering::Relaxed) {
-                return Err(Error::Interrupted);
-            }
-            let color = if half { ColorType::F16 } else { ColorType::F32 };
-            let (width, height) = (frame.width, frame.height);
-            // The preview first: the EXR writer takes the frame's planes over.
-            if let Some(p) = &png {
-                render::png::write_png(&frame, p, exposure)?;
-            }
-            render::exr::write_exr(frame, &output, color)?;
-            eprintln!(
-                "{}: {}x{} in {:.2} s, {} rays, {:.2} Mrays/s",
-                output.display(),
-                width,
-                height,
-                stats.elapsed.as_secs_f64(),
-                stats.rays,
-                stats.rays_per_second() / 1e6
-            );
+        Command::Render(args) => render(args),
+        Command::Trace(args) => trace(args),
+        Command::Check { scene } => check(&scene),
+        Command::Schema => schema(),
+        Command::ExportPov(args) => export_pov(args),
+        Command::Bench(args) => bench(args),
+        Command::Generate(args) => generate(args),
+    }
+}
+
+/// `komplex render`: the EXR (and the PNG preview), both checked writable
+/// before the render and written only once it is complete.
+fn render(args: RenderArgs) -> Result<(), Error> {
+    let RenderArgs { scene, output, png, size, threads, precision, samples, half, exposure } = args;
+    render::frame::set_global_threads(threads)?;
+    let cancel = interrupt_flag();
+    if !exposure.is_finite() {
+        return Err(Error::Options(format!("--exposure must be a finite number of stops, got {exposure}")));
+    }
+    let mut world = render::load(&scene)?;
+    if let Some(n) = samples {
+        if !(1..=16).contains(&n) {
+            return Err(Error::Options(format!("--samples must be between 1 and 16, got {n}")));
+        }
+        world.settings.samples = n;
+    }
+    size.apply(&mut world)?;
+    world.complex.set_precision(precision.into());
+    let output = output.unwrap_or_else(|| default_output(&scene));
+    // Fail before the render, not after it, if an output cannot be written.
+    render::output::check_writable(&output)?;
+    if let Some(p) = &png {
+        render::output::check_writable(p)?;
+    }
+    let rows = u64::from(world.camera.height());
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let bar = indicatif::ProgressBar::new(rows);
+        if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rows {elapsed}") {
+            bar.set_style(style);
+        }
+        bar
+    });
+    let tick = || {
+        if let Some(b) = &bar {
+            b.inc(1);
+        }
+    };
+    let (frame, stats) =
+        render::frame::render_until(&world, render::frame::Options { threads, colour_only: false }, &tick, &cancel)?;
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    // A Ctrl-C from here on lets the (short) writing finish, so the
+    // files on disk are both old or both new.
+    if cancel.load(Ordering::Relaxed) {
+        return Err(Error::Interrupted);
+    }
+    let color = if half { ColorType::F16 } else { ColorType::F32 };
+    let (width, height) = (frame.width, frame.height);
+    // The preview first: the EXR writer takes the frame's planes over.
+    if let Some(p) = &png {
+        render::png::write_png(&frame, p, exposure)?;
+    }
+    render::exr::write_exr(frame, &output, color)?;
+    eprintln!(
+        "{}: {}x{} in {:.2} s, {} rays, {:.2} Mrays/s",
+        output.display(),
+        width,
+        height,
+        stats.elapsed.as_secs_f64(),
+        stats.rays,
+        stats.rays_per_second() / 1e6
+    );
+    Ok(())
+}
+
+/// `komplex trace`: one ray's report, as text or JSON.
+fn trace(args: TraceArgs) -> Result<(), Error> {
+    let TraceArgs { scene, origin, direction, json } = args;
+    let world = render::load(&scene)?;
+    let report = render::trace::trace(&world, triple(&origin), triple(&direction))?;
+    if json {
+        let text = serde_json::to_string_pretty(&report).map_err(|e| Error::Options(e.to_string()))?;
+        println!("{text}");
+    } else {
+        print!("{report}");
+    }
+    Ok(())
+}
+
+/// `komplex check`: the summary and warnings of a valid scene.
+fn check(scene: &Path) -> Result<(), Error> {
+    let world = render::load(scene)?;
+    print!("{}", render::check::check(&world));
+    Ok(())
+}
+
+/// `komplex schema`.
+fn schema() -> Result<(), Error> {
+    print!("{}", render::format::schema_json());
+    Ok(())
+}
+
+/// `komplex export-pov`: the POV-Ray scene, to a file or stdout.
+fn export_pov(args: ExportPovArgs) -> Result<(), Error> {
+    let ExportPovArgs { scene, output, mask, size } = args;
+    let mut world = render::load(&scene)?;
+    size.apply(&mut world)?;
+    let text = render::pov::export(&world, render::pov::PovOptions { mask });
+    write_text(output.as_deref(), &text)
+}
+
+/// `komplex bench`: one table row per scene.
+fn bench(args: BenchArgs) -> Result<(), Error> {
+    let BenchArgs { scenes, size, threads, precision, runs } = args;
+    if !(1..=1000).contains(&runs) {
+        return Err(Error::Options(format!("--runs must be between 1 and 1000, got {runs}")));
+    }
+    render::frame::set_global_threads(threads)?;
+    println!(
+        "{:<28} {:>8} {:>9} {:>9} {:>9} {:>12} {:>12} {:>14} {:>14} {:>9} {:>5}",
+        "scene",
+        "blocks",
+        "load s",
+        "size",
+        "render s",
+        "primary",
+        "all rays",
+        "primary/s",
+        "all rays/s",
+        "median s",
+        "runs"
+    );
+    for scene in scenes {
+        let m = render::bench::measure_runs(&scene, (size.width, size.height), threads, precision.into(), runs)?;
+        println!(
+            "{:<28} {:>8} {:>9.3} {:>9} {:>9.3} {:>12} {:>12} {:>14.0} {:>14.0} {:>9.3} {:>5}",
+            scene.file_stem().map_or_else(|| scene.display().to_string(), |s| s.to_string_lossy().into()),
+            m.blocks,
+            m.load.as_secs_f64(),
+            format!("{}x{}", m.width, m.height),
+            m.render.as_secs_f64(),
+            m.primary,
+            m.rays,
+            m.primary_per_second(),
+            m.rays_per_second(),
+            m.median.as_secs_f64(),
+            m.runs
+        );
+    }
+    Ok(())
+}
+
+/// `komplex generate`: a benchmark scene, to a file or stdout.
+fn generate(args: GenerateArgs) -> Result<(), Error> {
+    let scene = match args.kind {
+        Generator::Sphereflake { level } => render::generate::sphereflake(level),
+        Generator::Grid { count, seed } => render::generate::grid(count, seed),
+    };
+    write_text(args.output.as_deref(), &render::generate::to_json(&scene))
+}
+
+/// Writes `text` to `path`, or to stdout without a path.
+fn write_text(path: Option<&Path>, text: &str) -> Result<(), Error> {
+    match path {
+        Some(path) => std::fs::write(path, text).map_err(|source| Error::Io { path: path.to_path_buf(), source }),
+        None => {
+            print!("{text}");
             Ok(())
-        }
-        Command::Trace { scene, origin, direction, json } => {
-            let world = render::load(&scene)?;
-            let report = render::trace::trace(&world, triple(&origin), triple(&direction))?;
-            if json {
-                let text = serde_json::to_string_pretty(&report).map_err(|e| Error::Options(e.to_string()))?;
-                println!("{text}");
-            } else {
-                print!("{report}");
-            }
-            Ok(())
-        }
-        Command::Check { scene } => {
-            let world = render::load(&scene)?;
-            print!("{}", render::check::check(&world));
-            Ok(())
-        }
-        Command::Schema => {
-            print!("{}", render::format::schema_json());
-            Ok(())
-        }
-        Command::Bench { scenes, size, threads, precision, runs } => {
-            if !(1..=1000).contains(&runs) {
-                return Err(Error::Options(format!("--runs must be between 1 and 1000, got {runs}")));
-            }
-            render::frame::set_global_threads(threads)?;
-            println!(
-                "{:<28} {:>8} {:>9} {:>9} {:>9} {:>12} {:>12} {:>14} {:>14} {:>9} {:>5}",
-                "scene",
-                "blocks",
-                "load s",
-                "size",
-                "render s",
-                "primary",
-                "all rays",
-                "primary/s",
-                "all rays/s",
-                "median s",
-                "runs"
-            );
-            for scene in scenes {
-                let m =
-                    render::bench::measure_runs(&scene, (size.width, size.height), threads, precision.into(), runs)?;
-                println!(
-                    "{:<28} {:>8} {:>9.3} {:>9} {:>9.3} {:>12} {:>12} {:>14.0} {:>14.0} {:>9.3} {:>5}",
-                    scene.file_stem().map_or_else(|| scene.display().to_string(), |s| s.to_string_lossy().into()),
-                    m.blocks,
-                    m.load.as_secs_f64(),
-                    format!("{}x{}", m.width, m.height),
-                    m.render.as_secs_f64(),
-                    m.primary,
-                    m.rays,
-                    m.primary_per_second(),
-                    m.rays_per_second(),
-                    m.median.as_secs_f64(),
-                    m.runs
-                );
-            }
-            Ok(())
-        }
-        Command::Generate { kind, output } => {
-            let scene = match kind {
-                Generator::Sphereflake { level } => render::generate::sphereflake(level),
-                Generator::Grid { count, seed } => render::generate::grid(count, seed),
-            };
-            let text = render::generate::to_json(&scene);
-            match output {
-                Some(path) => std::fs::write(&path, text).map_err(|source| Error::Io { path, source }),
-                None => {
-                    print!("{text}");
-                    Ok(())
-                }
-            }
-        }
-        Command::ExportPov { scene, output, mask, size } => {
-            let mut world = render::load(&scene)?;
-            size.apply(&mut world)?;
-            let text = render::pov::export(&world, render::pov::PovOptions { mask });
-            match output {
-                Some(path) => std::fs::write(&path, text).map_err(|source| Error::Io { path, source }),
-                None => {
-                    print!("{text}");
-                    Ok(())
-                }
-            }
         }
     }
 }
