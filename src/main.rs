@@ -3,7 +3,7 @@
 //! Thin by design: parse arguments, call the `render` crate, print, and map
 //! errors to exit codes (see docs/cli.md).
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -325,6 +325,10 @@ fn schema() -> Result<(), Error> {
 /// `komplex export-pov`: the POV-Ray scene, to a file or stdout.
 fn export_pov(args: ExportPovArgs) -> Result<(), Error> {
     let ExportPovArgs { scene, output, mask, size } = args;
+    // Fail before loading, not after, if the output cannot be written.
+    if let Some(p) = &output {
+        render::output::check_writable(p)?;
+    }
     let mut world = render::load(&scene)?;
     size.apply(&mut world)?;
     let text = render::pov::export(&world, render::pov::PovOptions { mask });
@@ -374,6 +378,9 @@ fn bench(args: BenchArgs) -> Result<(), Error> {
 
 /// `komplex generate`: a benchmark scene, to a file or stdout.
 fn generate(args: GenerateArgs) -> Result<(), Error> {
+    if let Some(p) = &args.output {
+        render::output::check_writable(p)?;
+    }
     let scene = match args.kind {
         Generator::Sphereflake { level } => render::generate::sphereflake(level),
         Generator::Grid { count, seed } => render::generate::grid(count, seed),
@@ -381,10 +388,12 @@ fn generate(args: GenerateArgs) -> Result<(), Error> {
     write_text(args.output.as_deref(), &render::generate::to_json(&scene))
 }
 
-/// Writes `text` to `path`, or to stdout without a path.
+/// Writes `text` to `path`, or to stdout without a path. A file is
+/// written as every output is: to a temporary file beside it, renamed over
+/// it only when complete, so a failed write leaves the earlier file.
 fn write_text(path: Option<&Path>, text: &str) -> Result<(), Error> {
     match path {
-        Some(path) => std::fs::write(path, text).map_err(|source| Error::Io { path: path.to_path_buf(), source }),
+        Some(path) => render::output::write_atomic(path, |w| w.write_all(text.as_bytes()).map_err(|e| e.to_string())),
         None => {
             print!("{text}");
             Ok(())

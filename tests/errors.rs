@@ -5,7 +5,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use crate::support::{komplex, tempdir, text, write_scene};
+use crate::support::{komplex, scene, tempdir, text, write_scene};
 
 const CAMERA: &str = r#""camera": { "eye": [0, 0, 5], "direction": [0, 0, -1], "width": 8, "height": 6 }"#;
 
@@ -364,6 +364,70 @@ fn outputs_that_cannot_be_written_exit_3_before_rendering() {
     assert!(pipe.exists() && !pipe.is_file(), "the pipe was replaced");
     // A bad preview path fails before the EXR is written, not after.
     check(&["render", "ok.json", "-o", "out.exr", "--png", "missing/out.png"], 3, &["missing/out.png: cannot create"]);
+}
+
+#[test]
+fn failed_generate_and_export_pov_leave_an_existing_output_untouched() {
+    // `out.exr` stands for any earlier output; `check` compares the whole
+    // directory, so a leftover temporary file fails too.
+    check(
+        &["export-pov", "latin1.json", "-o", "out.exr"],
+        1,
+        &["latin1.json: line 1, column 14: the file is not UTF-8"],
+    );
+    check(&["export-pov", "dir.json", "-o", "out.exr"], 3, &["dir.json: Is a directory"]);
+    check(
+        &["export-pov", "ok.json", "-o", "out.exr", "--width", "0"],
+        1,
+        &["--width/--height: the image size 0x1 is empty"],
+    );
+    check(&["generate", "grid", "--count", "0", "-o", "out.exr"], 2, &["invalid value '0' for '--count <COUNT>'"]);
+    // Outputs that cannot be written: refused as the render refuses them.
+    check(&["export-pov", "ok.json", "-o", "dir.json"], 3, &["dir.json: is a directory, not a file"]);
+    check(
+        &["generate", "sphereflake", "-o", "missing/dir/out.json"],
+        3,
+        &["missing/dir/out.json: cannot create a file in directory missing/dir: No such file or directory"],
+    );
+    let fifo = tempdir();
+    let pipe = fifo.path().join("pipe");
+    assert!(std::process::Command::new("mkfifo").arg(&pipe).status().unwrap().success());
+    check(&["generate", "sphereflake", "-o", pipe.to_str().unwrap()], 3, &["pipe: is not a regular file"]);
+    assert!(pipe.exists() && !pipe.is_file(), "the pipe was replaced");
+}
+
+/// A write that fails part way through (past the file-size limit of
+/// `ulimit -f`, with SIGXFSZ ignored so that the write returns `EFBIG`
+/// instead of killing the process) leaves the earlier file as it was, and
+/// no temporary file.
+#[test]
+fn a_write_that_fails_part_way_leaves_the_earlier_output() {
+    let table = scene("table.json");
+    let table = table.to_str().unwrap();
+    for args in [
+        vec!["generate", "sphereflake", "--level", "2", "-o", "out.json"],
+        vec!["generate", "grid", "--count", "50", "-o", "out.json"],
+        vec!["export-pov", table, "-o", "out.json"],
+    ] {
+        let dir = tempdir();
+        let d = dir.path();
+        std::fs::write(d.join("out.json"), b"keep me").unwrap();
+        let before = snapshot(d);
+        // One 512-byte block; every output here is several kilobytes.
+        let o = std::process::Command::new("sh")
+            .arg("-c")
+            .arg("trap '' XFSZ; ulimit -f 1; exec \"$@\"")
+            .arg("sh")
+            .arg(env!("CARGO_BIN_EXE_komplex"))
+            .args(&args)
+            .current_dir(d)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(3), "{args:?}: {}", text(&o));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.starts_with("error: out.json: ") && err.contains("File too large"), "{args:?}: {err}");
+        assert!(snapshot(d) == before, "{args:?}: the directory changed: {:?}", snapshot(d).keys().collect::<Vec<_>>());
+    }
 }
 
 #[test]
