@@ -8,10 +8,10 @@ use std::path::Path;
 use complex::{Block, Complex, ComplexOptions};
 use quadric::nalgebra::{Point3, Vector3};
 
-use crate::camera::Camera;
+use crate::camera::{Camera, CameraError};
 use crate::error::{Error, SceneError};
 use crate::flatten::{finite_triple, vec3};
-use crate::format::SceneFile;
+use crate::format::{CameraSpec, SceneFile};
 use crate::limits::MAX_BOUNCES;
 use crate::world::{BlockInfo, Light, Material, Model, Settings, Triple, World};
 
@@ -42,6 +42,24 @@ fn colour(t: &Triple, place: &str, what: &str) -> Result<(), SceneError> {
     Ok(())
 }
 
+/// The member of `camera` a camera error is about, so that the error
+/// names it (and its line and column) rather than the whole camera.
+fn camera_field(e: &CameraError, c: &CameraSpec) -> &'static str {
+    match e {
+        CameraError::ZeroDirection => "camera.direction",
+        // The eye is finite (checked first); an up vector of finite
+        // components can still have a norm that overflows.
+        CameraError::NonFinite if vec3(c.up).norm().is_finite() => "camera.eye",
+        CameraError::NonFinite | CameraError::UpParallel => "camera.up",
+        CameraError::EmptyImage(0, _) => "camera.width",
+        CameraError::EmptyImage(..) => "camera.height",
+        // Either side can be cut down; the longer is the likelier mistake.
+        CameraError::TooLarge(w, h) if h > w => "camera.height",
+        CameraError::TooLarge(..) => "camera.width",
+        CameraError::BadAperture(_) => "camera.aperture",
+    }
+}
+
 impl SceneFile {
     /// Parses and converts a scene; every error carries its place with a
     /// line and column.
@@ -70,7 +88,7 @@ impl SceneFile {
         finite_triple(&c.up, "camera.up", "the up vector")?;
         let camera =
             Camera::new(Point3::from(vec3(c.eye)), vec3(c.direction), vec3(c.up), c.width, c.height, c.aperture)
-                .map_err(|e| SceneError::semantic("camera", e.to_string()))?;
+                .map_err(|e| SceneError::semantic(camera_field(&e, c), e.to_string()))?;
 
         let s = &self.settings;
         colour(&s.ambient, "settings.ambient", "the ambient light")?;

@@ -24,7 +24,9 @@ pub enum SceneError {
     Semantic {
         /// JSON path (and block/object name in `message`).
         place: String,
-        /// 1-based line and column of the value at `place`, when known.
+        /// 1-based line and column of the value at `place` (or of its
+        /// nearest enclosing value, when `place` is a member left out),
+        /// when known.
         position: Option<(usize, usize)>,
         /// What is wrong.
         message: String,
@@ -59,7 +61,8 @@ impl SceneError {
         }
     }
 
-    /// Adds the line and column of a semantic error's place in `text`.
+    /// Adds the line and column of a semantic error's place in `text`, or
+    /// of its nearest enclosing value if the place is a member left out.
     pub(crate) fn located(self, text: &str) -> Self {
         match self {
             SceneError::Semantic { place, position: None, message } => {

@@ -167,26 +167,54 @@ impl<'a> Scanner<'a> {
     }
 }
 
-/// The 1-based line and column where the value at `path` starts in `text`.
-pub(crate) fn locate(text: &str, path: &str) -> Option<(usize, usize)> {
+/// Where a path was found: the 1-based line and column of a value, and
+/// whether it is the value at the path (`exact`) or, the path leaving the
+/// text, its nearest enclosing value.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Found {
+    line: usize,
+    column: usize,
+    exact: bool,
+}
+
+/// Finds the value at `path` in `text`, or its nearest enclosing value;
+/// `None` only for a path that cannot be read.
+fn find(text: &str, path: &str) -> Option<Found> {
     let mut s = Scanner { b: text.as_bytes(), pos: 0 };
+    let mut exact = true;
     for seg in segments(path)? {
-        s.descend(&seg)?;
+        let start = s.pos;
+        if s.descend(&seg).is_none() {
+            s.pos = start;
+            exact = false;
+            break;
+        }
     }
     s.ws();
     let before = text.get(..s.pos.min(text.len()))?;
     let line = before.matches('\n').count() + 1;
     let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
-    Some((line, column))
+    Some(Found { line, column, exact })
+}
+
+/// The 1-based line and column where the value at `path` starts in `text`,
+/// or, if that value is not in the text, where its nearest enclosing value
+/// starts: a member left out and given its default (`camera.up`) is found
+/// at its object.
+pub(crate) fn locate(text: &str, path: &str) -> Option<(usize, usize)> {
+    find(text, path).map(|f| (f.line, f.column))
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{key_step, locate};
+    use super::{find, key_step, locate};
 
+    const TEXT: &str = "{\n  \"a\": [1, {\"b\": \"x,]\"}, [2, 3]],\n  \"c\": {\"d\": {}, \"e\": true}\n}";
+
+    /// The value at `path` itself (not an enclosing one) is at `want`.
     fn check(path: &str, want: Option<(usize, usize)>) {
-        let text = "{\n  \"a\": [1, {\"b\": \"x,]\"}, [2, 3]],\n  \"c\": {\"d\": {}, \"e\": true}\n}";
-        assert_eq!(locate(text, path), want, "{path}");
+        let exact = find(TEXT, path).filter(|f| f.exact).map(|f| (f.line, f.column));
+        assert_eq!(exact, want, "{path}");
     }
 
     #[test]
@@ -205,6 +233,22 @@ mod tests {
         check("c[\"e\"", None);
     }
 
+    /// A path that leaves the text is located at its nearest enclosing value.
+    #[test]
+    fn a_missing_member_is_located_at_its_parent() {
+        let at = |path: &str| locate(TEXT, path);
+        for path in ["a", "a[1].b", "a[2][1]", "c.e", "c[\"e\"]"] {
+            assert_eq!(find(TEXT, path).map(|f| f.exact), Some(true), "{path}");
+        }
+        for (path, parent) in [("c.f", "c"), ("c.d.x", "c.d"), ("a[5]", "a"), ("a[1].z", "a[1]"), ("a[0].x", "a[0]")] {
+            assert_eq!(find(TEXT, path).map(|f| f.exact), Some(false), "{path}");
+            assert_eq!(at(path), at(parent), "{path}");
+        }
+        assert_eq!(at("x.y"), Some((1, 1)));
+        // A path that cannot be read is not located.
+        assert_eq!(at("c[\"e\""), None);
+    }
+
     /// A member whose name holds dots, brackets, quotes or escapes is
     /// found from the step `key_step` writes for it.
     #[test]
@@ -216,7 +260,9 @@ mod tests {
             for written in [json.clone(), json.replace('g', "\\u0067")] {
                 let text = format!("{{\"m\": {{\"other\": 1, {written}: {{\"ambient\": 7}}}}}}");
                 let path = format!("m{}.ambient", key_step(name));
-                let (line, column) = locate(&text, &path).unwrap_or_else(|| panic!("{path} not found in {text}"));
+                let found = find(&text, &path).filter(|f| f.exact);
+                let (line, column) =
+                    found.map(|f| (f.line, f.column)).unwrap_or_else(|| panic!("{path} not found in {text}"));
                 assert_eq!(line, 1);
                 // Columns count characters.
                 assert_eq!(text.chars().nth(column - 1), Some('7'), "{path} in {text}");
