@@ -1,0 +1,3 @@
+//! Integration tests of `render` (one test binary, topic modules).
+
+mod module_graph;
