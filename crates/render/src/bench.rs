@@ -1,4 +1,4 @@
-//! `komplex bench`: throughput of the render loop on a scene (issue 6).
+//! `komplex bench`: throughput of the render loop on a scene.
 //!
 //! One render gives both figures: primary rays (one per pixel, the
 //! anti-aliasing setting is forced to 1 so POV-Ray's `-A` renders compare)

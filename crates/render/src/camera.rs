@@ -174,7 +174,6 @@ impl Camera {
     /// The ray through the (possibly fractional) pixel position `(i, j)`.
     #[inline]
     pub fn ray_at(&self, i: f64, j: f64) -> Ray {
-        // The offset is never zero (its D component is focal > 0) and finite.
         // The offset's D component is `focal > 0` and everything is finite,
         // so this cannot fail; the fallback only keeps the path panic-free.
         Ray::new(self.eye, self.offset(i, j)).unwrap_or(self.centre)

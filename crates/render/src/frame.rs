@@ -324,13 +324,13 @@ pub fn render_until(
     let width = world.camera.width() as usize;
     let mut frame = Frame::zeroed(world.camera.width(), world.camera.height(), !options.colour_only);
     let runs = frame.runs_mut(width * ROWS);
-    // One shader for the frame (its material table is built once).
+    // One shader for the frame, shared by the workers.
     let shader = Shader::new(world);
     // Every band of rows is its own task, taken in order from one queue by
     // whichever worker is free: rows differ in cost by orders of
     // magnitude (sky against glass), so a split made early from the thread
-    // count alone (rayon's adaptive split) left one of two cores idle for a
-    // quarter of the glass scene; and the workers render neighbouring bands,
+    // count alone (rayon's adaptive split) leaves one of two cores idle for
+    // a quarter of the glass scene; and the workers render neighbouring bands,
     // which meet the same blocks, so a large scene's data is fetched into
     // the shared cache once for all of them (a split in halves has each
     // worker walk a different half of the scene).

@@ -1,4 +1,4 @@
-//! Benchmark scene generators (issue 6): Haines' sphereflake and a grid of
+//! Benchmark scene generators: Haines' sphereflake and a grid of
 //! random bounded blocks, as scene documents.
 //!
 //! ```

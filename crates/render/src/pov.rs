@@ -1,5 +1,5 @@
 //! Export to POV-Ray 3.7 scene language, for comparison renders and the
-//! mask test (issue 6).
+//! mask test.
 //!
 //! The export reads the converted [`World`], so POV-Ray sees exactly the
 //! solids the kernel traces:
