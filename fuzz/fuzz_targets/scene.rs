@@ -11,8 +11,9 @@
 
 use libfuzzer_sys::fuzz_target;
 use quadric::Ray;
-use render::scene::{SceneFile, World};
+use render::format::SceneFile;
 use render::shade::{Scratch, Shader};
+use render::world::World;
 use render::SceneError;
 
 /// Bounces per shaded ray in this target: a scene may ask for up to 64, and
@@ -71,9 +72,9 @@ fn check_world(world: &mut World) {
     let shader = Shader::new(world);
     let mut scratch = Scratch::default();
     for (i, j) in pixels {
-        let (colour, surface) = shader.primary(&camera.ray(i, j), &mut scratch);
+        let (colour, hit) = shader.primary(&camera.ray(i, j), &mut scratch);
         assert!(!colour.iter().any(|c| c.is_nan()), "pixel ({i}, {j}): colour {colour:?}");
-        if let Some(s) = surface {
+        if let Some(s) = hit {
             assert!(s.t.is_finite() && s.normal.iter().all(|x| x.is_finite()), "pixel ({i}, {j}): {s:?}");
         }
     }
