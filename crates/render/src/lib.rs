@@ -1,11 +1,12 @@
 //! # render — Komplex scenes to images
 //!
-//! The edge of Komplex: the JSON scene format ([`format`]) and the world it
-//! converts into ([`world`], by [`load`] or `SceneFile::to_world`), the
-//! camera of SPEC §4 ([`camera`]), Whitted-style shading of SPEC §5
-//! ([`shade`]), the parallel render loop ([`frame`]) and the OpenEXR and
-//! PNG writers ([`exr`], [`png`]). Only this crate knows JSON and image
-//! formats; the kernel crates `quadric` and `complex` stay plain geometry.
+//! The edge of Komplex: the JSON scene format ([`format`](mod@format)) and
+//! the world it converts into ([`world`], by [`load`] or
+//! `SceneFile::to_world`), the camera of SPEC §4 ([`camera`]),
+//! Whitted-style shading of SPEC §5 ([`shade`]), the parallel render loop
+//! ([`frame`]) and the OpenEXR and PNG writers ([`exr`], [`png`]). Only this
+//! crate knows JSON and image formats; the kernel crates `quadric` and
+//! `complex` stay plain geometry.
 //!
 //! ```
 //! let text = r#"{

@@ -47,7 +47,13 @@ pub fn check_writable(path: &Path) -> Result<(), Error> {
     temporary(path).map(drop)
 }
 
-/// Writes `path` through `write`, atomically.
+/// Writes `path` through `write`, atomically: `write` fills a buffered
+/// temporary file beside `path`, which is renamed over `path` only once
+/// `write` and the flush to disk have succeeded. On any error the temporary
+/// file is removed and `path` is left as it was; an error `write` returns
+/// is an [`Error::Encode`] with its message. A `path` that exists but is not
+/// a regular file (a directory, device or pipe) is refused, as
+/// [`check_writable`] refuses it.
 pub fn write_atomic(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<&mut File>) -> Result<(), String>,
