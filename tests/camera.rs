@@ -1,4 +1,4 @@
-//! The camera of SPEC §4, end to end: spheres land on the pixels the
+//! The camera of docs/model.md §4, end to end: spheres land on the pixels the
 //! formulas predict, and `Z` is the analytic distance along the ray.
 
 use crate::geom::{add, dot, mul, sub, Cam, V};

@@ -1,4 +1,4 @@
-//! Plain vector helpers and the SPEC §4 camera formulas, written out
+//! Plain vector helpers and the camera formulas of docs/model.md §4.2, written out
 //! independently of the renderer as test oracles.
 
 pub type V = [f64; 3];
@@ -32,7 +32,7 @@ pub struct Cam {
 }
 
 impl Cam {
-    /// The unit direction of the ray through pixel (i, j), literally as in SPEC §4.
+    /// The unit direction of the ray through pixel (i, j), literally as in docs/model.md §4.2.
     pub fn ray(&self, i: u32, j: u32) -> V {
         let d = unit(self.d);
         let u = unit(sub(self.u, mul(dot(self.u, d), d)));

@@ -1,4 +1,4 @@
-//! Shading against analytic values (SPEC §5): ambient plus Lambert, and
+//! Shading against analytic values (docs/model.md §5.2, §5.3): ambient plus Lambert, and
 //! shadows from opaque and transparent blockers.
 
 use crate::geom::{add, dot, mul, prod, sub, unit, Cam, V};

@@ -1,4 +1,4 @@
-//! The pinhole camera of SPEC §4 (seed 001), in pixel units.
+//! The pinhole camera of docs/model.md §4.2, in pixel units.
 
 use quadric::nalgebra::{Point3, Vector3};
 use quadric::Ray;
@@ -208,8 +208,8 @@ impl Camera {
 mod tests {
     use super::*;
 
-    /// The SPEC §4 formulas, literally, as an independent oracle.
-    fn spec_pixel(
+    /// The formulas of docs/model.md §4.2, literally, as an independent oracle.
+    fn model_pixel(
         e: Point3<f64>,
         d: Vector3<f64>,
         u: Vector3<f64>,
@@ -234,7 +234,7 @@ mod tests {
         let (e, d, u) = (Point3::from(Vector3::from(e)), Vector3::from(d), Vector3::from(u));
         let cam = Camera::new(e, d, u, w, h, angle).unwrap();
         for (i, j) in [(0, 0), (0, w - 1), (h - 1, 0), (h - 1, w - 1), (h / 2, w / 2), (h / 3, w / 5)] {
-            let want = spec_pixel(e, d, u, f64::from(w), f64::from(h), angle, f64::from(i), f64::from(j));
+            let want = model_pixel(e, d, u, f64::from(w), f64::from(h), angle, f64::from(i), f64::from(j));
             let got = cam.ray(i, j);
             assert_eq!(got.origin(), e);
             let err = (got.direction() - want).amax();

@@ -32,7 +32,7 @@ pub struct SceneFile {
     /// Optional URL or path of the JSON Schema, for editors. Ignored.
     #[serde(rename = "$schema", default, skip_serializing_if = "Option::is_none")]
     pub schema: Option<String>,
-    /// The camera (SPEC §4).
+    /// The camera (docs/model.md §4).
     pub camera: CameraSpec,
     /// Global rendering settings.
     #[serde(default)]
@@ -48,7 +48,7 @@ pub struct SceneFile {
     pub blocks: Vec<Entry>,
 }
 
-/// The pinhole camera of SPEC §4.
+/// The pinhole camera of docs/model.md §4.
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CameraSpec {
@@ -100,7 +100,7 @@ pub struct LightSpec {
     pub specular: Option<Triple>,
 }
 
-/// A surface material (SPEC §5).
+/// A surface material (docs/model.md §5.1).
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {

@@ -397,7 +397,7 @@ fn render_rows(shader: &Shader, i0: u32, out: &mut [Pixel]) -> u64 {
         while r < rows {
             let i = i0 + r as u32;
             let pair = if rows - r >= 2 { 2 } else { 1 };
-            // The pixel centres four at a time (SPEC §4): 2×2 squares, or
+            // The pixel centres four at a time (docs/model.md §4.2): 2×2 squares, or
             // 1×4 runs on a last single row. The four rays share one walk of
             // the BVH (`Shader::primary4`), with the same results as one by
             // one.
@@ -432,7 +432,7 @@ fn render_rows(shader: &Shader, i0: u32, out: &mut [Pixel]) -> u64 {
 
 /// Pixel `(i, j)` from an `n × n` stratified grid of sub-pixel rays: the
 /// mean of their colours, the fraction that hit, and the AOVs of the ray
-/// through the centre (SPEC §4). The sub-pixel rays go four at a time
+/// through the centre (docs/model.md §4.3). The sub-pixel rays go four at a time
 /// through [`Shader::primary4`], summed in the same order as one by one.
 fn supersampled(shader: &Shader, scratch: &mut Scratch, cam: &Camera, i: u32, j: u32, n: u32) -> Pixel {
     // The centre ray only for the AOVs: its colour would not be used.

@@ -2,8 +2,8 @@
 //!
 //! The edge of Komplex: the JSON scene format ([`format`](mod@format)) and
 //! the world it converts into ([`world`], by [`load`] or
-//! `SceneFile::to_world`), the camera of SPEC §4 ([`camera`]),
-//! Whitted-style shading of SPEC §5 ([`shade`]), the parallel render loop
+//! `SceneFile::to_world`), the camera of docs/model.md §4 ([`camera`]),
+//! Whitted-style shading of docs/model.md §5 ([`shade`]), the parallel render loop
 //! ([`frame`]) and the OpenEXR and PNG writers ([`exr`], [`png`]). Only this
 //! crate knows JSON and image formats; the kernel crates `quadric` and
 //! `complex` stay plain geometry.

@@ -234,7 +234,7 @@ fn write_plane(out: &mut String, h: &HalfSpace) -> std::fmt::Result {
     Ok(())
 }
 
-/// A POV texture approximating a material under our shading model (SPEC §5):
+/// A POV texture approximating a material under the shading model of docs/model.md §5:
 /// the pigment is the diffuse colour, POV's ambient is scaled so that
 /// `pigment × ambient = Ma × Sa`, Phong or Blinn-Phong maps to `phong` or
 /// `specular`, and `transmit` to the pigment's filter channel.

@@ -1,4 +1,4 @@
-//! Whitted-style shading (SPEC §5): ambient, Phong or Blinn-Phong per
+//! Whitted-style shading (docs/model.md §5): ambient, Phong or Blinn-Phong per
 //! visible light, shadow rays, mirror reflection and Snell refraction with
 //! the media taken from the ray's partition.
 //!
@@ -164,7 +164,7 @@ impl<'w> Shader<'w> {
 
     /// The first event after ε where something visible happens. Events
     /// between two transparent blocks of the same material are skipped:
-    /// they are one medium (SPEC §3).
+    /// they are one medium (docs/model.md §3.7).
     fn first_event(&self, ray: &Ray, scratch: &mut Scratch) -> Option<Event> {
         scratch.rays += 1;
         if !self.transparent {
