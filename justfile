@@ -16,7 +16,7 @@ ci:
 bench-pov *ARGS:
     bash scripts/bench-vs-povray.sh {{ARGS}}
 
-# Per-ray cost from the 100-block to the 100,000-block grid (issue 6), in
+# Per-ray cost from the 100-block to the 100,000-block grid, in
 # alternating rounds; `--instructions` adds callgrind's count (needs valgrind).
 bench-scaling *ARGS:
     bash scripts/bench-scaling.sh {{ARGS}}

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Per-ray cost from a small to a large random grid (issue 6: "per-ray cost
-# grows at most 3x from 100 to 100,000 blocks"). Both grids come from
+# Per-ray cost from a small to a large random grid (the goal in docs/benchmarks.md:
+# per-ray cost grows at most 3x from 100 to 100,000 blocks). Both grids come from
 # `komplex generate grid --count N` (same seed, same camera framing the
 # cube). Each round renders the small grid and then the large one with
 # `komplex bench --runs K` (the scene loaded once, the fastest of K renders

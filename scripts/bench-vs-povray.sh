@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Komplex vs POV-Ray 3.7 on the same scenes, the same image size and the
-# same number of threads (issue 6). For each scene: `komplex export-pov`
+# same number of threads (docs/benchmarks.md). For each scene: `komplex export-pov`
 # writes the POV-Ray version, POV-Ray renders it without anti-aliasing and
 # reports its trace time on stderr, `komplex bench` renders the JSON scene
 # once; the ratio is POV-Ray's trace time over ours (equal primary rays, so

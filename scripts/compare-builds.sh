@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The keep-or-drop check of a speed change (docs/benchmarks.md, "Render hot
-# path"): two komplex binaries, the one before a change and the one after,
+# The keep-or-drop check of a speed change (docs/benchmarks.md, "Comparing
+# two builds"): two komplex binaries, the one before a change and the one after,
 # must render the same images, and the figure that decides is the change in
 # render-only instructions, which (unlike time on a shared machine) repeats.
 #

@@ -1,4 +1,4 @@
-//! `komplex generate` and `komplex bench` (issue 6). No timings are
+//! `komplex generate` and `komplex bench`. No timings are
 //! asserted: only that the figures are there and consistent.
 
 use crate::support::{bench_scenes, komplex, komplex_ok, scene, tempdir};

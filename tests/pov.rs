@@ -1,4 +1,4 @@
-//! POV-Ray cross-check (issue 6): `komplex export-pov --mask` rendered by
+//! POV-Ray cross-check: `komplex export-pov --mask` rendered by
 //! POV-Ray 3.7 must agree with our `id.block` channel. POV-Ray is an
 //! independent implementation of the same geometry (its own root finder,
 //! CSG and camera), so agreement checks the exporter and our tracer at once.
