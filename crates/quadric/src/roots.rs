@@ -191,6 +191,44 @@ mod tests {
         }
     }
 
+    /// Factors in the filter's safe range `[2⁻³⁰⁰, 2³⁰⁰]`, or zero.
+    fn safe_factor() -> impl Strategy<Value = f64> {
+        prop_oneof![
+            8 => (-290i32..290, 1.0..2.0f64, any::<bool>())
+                .prop_map(|(e, m, neg)| if neg { -m * 2f64.powi(e) } else { m * 2f64.powi(e) }),
+            1 => Just(0.0),
+        ]
+    }
+
+    proptest! {
+        /// The filter is the fast path: it decides every sum of safe
+        /// factors whose rounded value clears sixteen times the rounding
+        /// (twice its own bound), so that the expansion runs only near
+        /// cancellation; all-zero sums included.
+        #[test]
+        fn the_filter_decides_clear_sums(
+            terms in prop::collection::vec((prop_oneof![Just(1.0), Just(-1.0)], safe_factor(), safe_factor(), safe_factor()), 1..7)
+        ) {
+            let sum: f64 = terms.iter().map(|&(sg, x, y, z)| sg * x * y * z).sum();
+            let magnitude: f64 = terms.iter().map(|&(sg, x, y, z)| (sg * x * y * z).abs()).sum();
+            if magnitude == 0.0 || sum.abs() > 16.0 * f64::EPSILON * magnitude {
+                prop_assert_eq!(filtered_sign_of_sum(&terms), Some(expansion_sign_of_sum(&terms)));
+            }
+        }
+
+        /// Outside the safe range the filter's bound is not proven, and it
+        /// defers whichever factor is out.
+        #[test]
+        fn the_filter_defers_factors_beyond_its_range(
+            x in safe_factor(), y in safe_factor(), at in 0usize..3, tiny in any::<bool>()
+        ) {
+            let out = if tiny { 2f64.powi(-400) } else { 2f64.powi(400) };
+            let mut f = [x.max(1.0), y.max(1.0), 1.0];
+            f[at] = out;
+            prop_assert_eq!(filtered_sign_of_sum(&[(1.0, f[0], f[1], f[2])]), None);
+        }
+    }
+
     #[test]
     fn semi_definite_minors() {
         // A diagonal matrix's minors (the quadrics of spheres and tubes).

@@ -101,7 +101,7 @@ fn rays_from_nearby_camera(scene: &Scene, shape: &Shape, n: usize, rng: &mut Rng
             continue;
         }
         let mut b = world((shape.outside)(rng));
-        if aim(b).map_or(true, |r| crosses(&r)) || !crosses(&ray) {
+        if aim(b).is_none_or(|r| crosses(&r)) || !crosses(&ray) {
             out.push(ray);
             continue;
         }
