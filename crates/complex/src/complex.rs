@@ -1,7 +1,5 @@
 //! The complex: blocks in priority order and the queries on them.
 
-use core::cell::RefCell;
-
 use quadric::nalgebra::{Point3, Vector3};
 use quadric::{Bound, Interval, IntervalSet, Ray};
 
@@ -9,8 +7,8 @@ use crate::block::{SolidRef, Spans};
 use crate::bounds::block_boxes;
 use crate::bvh::{Bvh, RayBoxes, RayBoxes4};
 use crate::kernel::Kernel;
-use crate::partition::{Event, Partition, Segment, Surface};
-use crate::{Aabb, Block, BlockId, ComplexError, Opacity};
+use crate::partition::{Event, Sets};
+use crate::{Aabb, Block, BlockId, ComplexError};
 
 /// The default ε relative to the scene's size: `ε = DEFAULT_RELATIVE_EPSILON · D`
 /// with `D` the diagonal of the box around all bounded blocks (`D = 1` if
@@ -107,104 +105,6 @@ pub struct Complex {
     unbounded: Vec<u32>,
     epsilon: f64,
     any_transparent: bool,
-}
-
-/// How many bounded partitions [`Complex::first_interface`] forms, each
-/// reaching one interval end further, before it forms the full one.
-const BOUNDED_TRIES: usize = 3;
-
-/// Per-thread buffers `partition_into` reuses, so that after the first ray
-/// on a thread it allocates only if `out` must grow.
-#[derive(Default)]
-struct Scratch {
-    sets: Sets,
-    /// The sets of [`Complex::first_interface`]'s previous try.
-    previous: Sets,
-    cuts: Vec<f64>,
-}
-
-/// The blocks' interval sets along one ray, stored flat: a set is a run of
-/// `intervals`, so collecting a block costs a copy of its few intervals, not
-/// of a whole fixed-capacity `IntervalSet` (several hundred bytes, copied
-/// two or three times on the way into a vector and again by its sort).
-#[derive(Debug, Default)]
-struct Sets {
-    /// `(block, first interval, count)`, sorted by block once collected.
-    blocks: Vec<(BlockId, u32, u32)>,
-    intervals: Vec<Interval>,
-}
-
-impl Sets {
-    fn clear(&mut self) {
-        self.blocks.clear();
-        self.intervals.clear();
-    }
-
-    /// Adds block `id`'s intervals that reach past `eps` (the ε rule: an
-    /// interval inside `[0, ε]` is no hit), if there are any (with none,
-    /// an empty entry if `keep_empty`: it records that the block was
-    /// looked at).
-    #[inline]
-    fn push(&mut self, id: BlockId, intervals: &[Interval], eps: f64, keep_empty: bool) -> &[Interval] {
-        let first = self.intervals.len();
-        // Sorted and disjoint: the intervals ending by ε are a prefix.
-        let keep = intervals.iter().position(|iv| iv.exit.t > eps).unwrap_or(intervals.len());
-        self.intervals.extend_from_slice(&intervals[keep..]);
-        let n = self.intervals.len() - first;
-        if n > 0 || keep_empty {
-            self.blocks.push((id, first as u32, n as u32));
-        }
-        &self.intervals[first..]
-    }
-
-    /// Priority order: by block id.
-    fn sort(&mut self) {
-        self.blocks.sort_unstable_by_key(|b| b.0);
-    }
-
-    fn len(&self) -> usize {
-        self.blocks.len()
-    }
-
-    /// The sets in priority order.
-    fn iter(&self) -> impl Iterator<Item = (BlockId, &[Interval])> + '_ {
-        self.blocks.iter().map(|&(id, first, n)| (id, &self.intervals[first as usize..(first + n) as usize]))
-    }
-
-    /// The one block with intervals, `Some(None)` if no block has any,
-    /// `None` if several have (the one-block shortcuts of the partition).
-    fn lone(&self) -> Option<Option<(BlockId, &[Interval])>> {
-        let mut blocks = self.iter().filter(|(_, ivs)| !ivs.is_empty());
-        let lone = blocks.next();
-        blocks.next().is_none().then_some(lone)
-    }
-
-    /// Block `id`'s intervals, if it has any.
-    fn get(&self, id: BlockId) -> Option<&[Interval]> {
-        let k = self.blocks.binary_search_by_key(&id, |b| b.0).ok()?;
-        let (_, first, n) = self.blocks[k];
-        Some(&self.intervals[first as usize..(first + n) as usize])
-    }
-
-    /// As a vector of interval sets (the public form, and the Certified
-    /// tie settlement's).
-    fn to_vec(&self) -> Vec<(BlockId, IntervalSet)> {
-        self.iter()
-            .map(|(id, ivs)| (id, IntervalSet::from_intervals(ivs.iter().copied()).unwrap_or_default()))
-            .collect()
-    }
-
-    /// Replaces the sets by `sets` (sorted by block).
-    fn assign(&mut self, sets: &[(BlockId, IntervalSet)]) {
-        self.clear();
-        for (id, set) in sets {
-            self.push(*id, set.as_slice(), f64::NEG_INFINITY, false);
-        }
-    }
-}
-
-thread_local! {
-    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
 }
 
 impl Complex {
@@ -413,7 +313,7 @@ impl Complex {
     /// thin) has its intervals clipped to that box ([`Complex::clip_to_box`],
     /// the same slabs as the walk's), so they all end before ε and the ε
     /// rule would remove every one of them. The sets are the same.
-    fn collect_sets(&self, ray: &Ray, max_t: f64, out: &mut Sets) {
+    pub(crate) fn collect_sets(&self, ray: &Ray, max_t: f64, out: &mut Sets) {
         out.clear();
         let eps = self.epsilon;
         let mut push = |i: u32, spans: &[Interval]| {
@@ -430,6 +330,52 @@ impl Complex {
             push(i, self.block_spans(i, ray, &rb, &mut scratch));
         }
         out.sort();
+    }
+
+    /// Like [`Complex::collect_sets`] with no bound, but the walk stops at
+    /// the first interval end `T` after `after` among the blocks visited,
+    /// which it returns (`∞` if there is none): every block with an
+    /// interval meeting `[0, T]` is collected (its padded box is entered by
+    /// `T`), possibly with some farther ones. Every block visited gets an
+    /// entry, empty or not; those found in `previous` (the same ray's
+    /// sets, collected this way) are copied from it.
+    pub(crate) fn collect_sets_to_first_end(
+        &self,
+        ray: &Ray,
+        after: f64,
+        out: &mut Sets,
+        previous: Option<&Sets>,
+    ) -> f64 {
+        out.clear();
+        let eps = self.epsilon;
+        let mut push = |i: u32, intervals: &[Interval], t_max: &mut f64| {
+            for iv in out.push(BlockId(i), intervals, eps, true) {
+                for e in [iv.enter.t, iv.exit.t] {
+                    if e > after && e < *t_max {
+                        *t_max = e;
+                    }
+                }
+            }
+        };
+        let known = |i: u32| previous.and_then(|p| p.get(BlockId(i)));
+        let rb = RayBoxes::new(ray);
+        let mut t_max = f64::INFINITY;
+        let mut scratch = Spans::Empty;
+        for i in self.unbounded_crossed(&rb, 0.0, f64::INFINITY) {
+            match known(i) {
+                Some(ivs) => push(i, ivs, &mut t_max),
+                None => push(i, self.block_spans(i, ray, &rb, &mut scratch), &mut t_max),
+            }
+        }
+        self.bvh.traverse(&rb, 0.0, &mut t_max, |k, _, t_max| {
+            let i = self.kernel.block(k);
+            match known(i) {
+                Some(ivs) => push(i, ivs, t_max),
+                None => push(i, self.slot_spans(k, ray, &rb, &mut scratch), t_max),
+            }
+        });
+        out.sort();
+        t_max
     }
 
     /// The unbounded blocks whose boxes the ray crosses within `[t_min, t_max]`.
@@ -793,7 +739,7 @@ impl Complex {
     /// The hit point at the crossing `t` of `solid`'s surface: refined onto
     /// the surface ([`quadric::Solid::hit_point`]) except in
     /// [`quadric::Precision::Fast`], where it is `ray.at(t)`.
-    fn hit_point(&self, ray: &Ray, t: f64, block: BlockId, solid: u32) -> Point3<f64> {
+    pub(crate) fn hit_point(&self, ray: &Ray, t: f64, block: BlockId, solid: u32) -> Point3<f64> {
         match self.blocks[block.index()].solids().get(solid as usize) {
             Some(s) => self.refined(ray, t, |t| s.hit_point(ray, t)),
             None => ray.at(t),
@@ -809,349 +755,13 @@ impl Complex {
         }
     }
 
-    fn normal(&self, block: BlockId, solid: u32, point: &Point3<f64>) -> Vector3<f64> {
+    pub(crate) fn normal(&self, block: BlockId, solid: u32, point: &Point3<f64>) -> Vector3<f64> {
         self.blocks[block.index()]
             .solids()
             .get(solid as usize)
             .and_then(|s| s.normal(point))
             .unwrap_or_else(Vector3::zeros)
     }
-
-    /// The partition of the ray into owned segments with the events between them.
-    pub fn partition(&self, ray: &Ray) -> Partition {
-        let mut out = Partition::default();
-        self.partition_into(ray, &mut out);
-        out
-    }
-
-    /// Like [`Complex::partition`], reusing `out`'s allocations (and
-    /// per-thread scratch buffers): only blocks whose boxes the ray crosses
-    /// are visited.
-    pub fn partition_into(&self, ray: &Ray, out: &mut Partition) {
-        self.partition_with(ray, f64::INFINITY, f64::INFINITY, out);
-    }
-
-    /// The segments of [`Complex::partition`] alone, into `out.segments`
-    /// (`out.events` is left empty): no hit points or normals are computed.
-    /// What a shadow ray needs to weigh the media between a point and a
-    /// light. Allocates only as [`Complex::partition_into`] does.
-    pub fn segments_into(&self, ray: &Ray, out: &mut Partition) {
-        self.partition_with(ray, f64::INFINITY, f64::NEG_INFINITY, out);
-    }
-
-    /// The segments of [`Complex::partition`] that start before `max_t`,
-    /// into `out.segments` (`out.events` is left empty): the same starts and
-    /// owners, and the same ends except the last one's, which lies at or
-    /// after `max_t` but may differ from the partition's. Only the blocks
-    /// whose boxes the ray crosses before `max_t` are visited, so a shadow
-    /// ray towards a light costs nothing beyond the light. Every segment that
-    /// starts before `max_t` is determined by those blocks: each of its
-    /// owners' intervals, and each interval end below `max_t`, reaches into
-    /// `[0, max_t)`. (In [`quadric::Precision::Certified`], which settles
-    /// near ties between the ends of any two blocks, every block is visited.)
-    /// A NaN `max_t` reads as `∞` ([`Complex::segments_into`]); for
-    /// `max_t <= 0` the list is empty.
-    pub fn segments_within(&self, ray: &Ray, max_t: f64, out: &mut Partition) {
-        if max_t.is_nan() || max_t == f64::INFINITY {
-            return self.segments_into(ray, out);
-        }
-        // Certified settles near ties between the ends of different blocks,
-        // a block beyond `max_t` included: it takes them all.
-        let reach = if self.kernel.precision == quadric::Precision::Certified { f64::INFINITY } else { max_t };
-        self.partition_with(ray, reach, f64::NEG_INFINITY, out);
-        let keep = out.segments.iter().take_while(|s| s.start < max_t).count();
-        out.segments.truncate(keep);
-    }
-
-    /// The partition formed from the blocks whose boxes the ray crosses
-    /// before `reach`, with its events up to `until` (see
-    /// `partition_of_sets`).
-    fn partition_with(&self, ray: &Ray, reach: f64, until: f64, out: &mut Partition) {
-        SCRATCH.with(|s| match s.try_borrow_mut() {
-            Ok(mut s) => {
-                let Scratch { sets, cuts, .. } = &mut *s;
-                self.partition_core(ray, reach, (sets, cuts), until, Events::All, out);
-            }
-            Err(_) => self.partition_core(ray, reach, (&mut Sets::default(), &mut Vec::new()), until, Events::All, out),
-        });
-    }
-
-    /// The first event of [`Complex::partition`] after ε where the medium
-    /// changes (`t > ε` and not [`Event::same_medium`]): exactly
-    /// `partition(ray).events.iter().find(|e| e.t > ε && !e.same_medium)`,
-    /// what a renderer stops at or refracts through. The partition is first
-    /// formed only from the blocks whose boxes the ray enters by the first
-    /// interval end `T` after ε (the BVH walk stops there): its events up to
-    /// `T` are those of the full partition, since every block with an
-    /// interval reaching into `[0, T]` is among them. If none of those
-    /// events qualifies, the next try reaches to the next interval end
-    /// after `T`; after a few tries the full partition is formed. `out` is scratch: it
-    /// is left holding a prefix of the partition's segments and, of its
-    /// events, only the one returned (the hit points and normals of the
-    /// events before it are not computed), or nothing (when at most
-    /// one block has intervals past ε the answer is read off that block's
-    /// intervals, and no partition is formed). Allocates only as
-    /// [`Complex::partition_into`] does.
-    pub fn first_interface(&self, ray: &Ray, out: &mut Partition) -> Option<Event> {
-        let eps = self.epsilon;
-        // `Events::FirstInterface` forms no event but the answer (`t > ε`,
-        // not within one medium), so the answer is the first event formed.
-        let found = |out: &Partition| out.events.first().copied();
-        SCRATCH.with(|s| match s.try_borrow_mut() {
-            Ok(mut s) => {
-                let Scratch { sets, previous, cuts } = &mut *s;
-                let mut after = eps;
-                for attempt in 0..BOUNDED_TRIES {
-                    // A retry meets the blocks of the last try again: their
-                    // sets are taken from it, not computed anew. (Not in
-                    // Certified, whose settlement may have moved them.)
-                    let reuse = attempt > 0 && self.kernel.precision != quadric::Precision::Certified;
-                    if reuse {
-                        core::mem::swap(sets, previous);
-                    }
-                    let until = self.collect_sets_to_first_end(ray, after, sets, reuse.then_some(&*previous));
-                    if attempt == 0 && self.kernel.precision != quadric::Precision::Certified {
-                        if let Some(answer) = self.lone_interface(ray, sets) {
-                            out.clear();
-                            return answer;
-                        }
-                    }
-                    self.partition_of_sets(ray, sets, cuts, until, Events::FirstInterface, out);
-                    // Events are formed only up to `until`, where they are
-                    // exact. With `until = ∞` nothing was cut off.
-                    let e = found(out);
-                    if e.is_some() || until == f64::INFINITY {
-                        return e;
-                    }
-                    after = until;
-                }
-                self.partition_core(ray, f64::INFINITY, (sets, cuts), f64::INFINITY, Events::FirstInterface, out);
-                found(out)
-            }
-            Err(_) => {
-                let buffers = (&mut Sets::default(), &mut Vec::new());
-                self.partition_core(ray, f64::INFINITY, buffers, f64::INFINITY, Events::FirstInterface, out);
-                found(out)
-            }
-        })
-    }
-
-    /// [`Complex::first_interface`] when at most one block has intervals
-    /// past ε (most rays of a glass scene: one leaving a glass body, one
-    /// seeing a single wall), read off that block's intervals without
-    /// forming the partition: `Some(answer)`, or `None` where the general
-    /// path must decide. With one block `B` the owners alternate between
-    /// nothing and `B`, each end is a change of owner (the intervals are
-    /// disjoint and never touch), and no change is within one medium; the
-    /// partition's event at an end `t > 0` is `B`'s entry or exit there if
-    /// the end is tagged with a solid, and none otherwise. So the answer is
-    /// the first end after ε: `None` if it is infinite (the ray stays in
-    /// `B`), the event formed exactly as `partition_of_sets` forms it if it
-    /// is tagged, the general path if it is not.
-    fn lone_interface(&self, ray: &Ray, sets: &Sets) -> Option<Option<Event>> {
-        let Some((block, intervals)) = sets.lone()? else { return Some(None) };
-        let eps = self.epsilon;
-        let (bound, entering) =
-            intervals.iter().flat_map(|iv| [(iv.enter, true), (iv.exit, false)]).find(|(b, _)| b.t > eps)?;
-        if !bound.t.is_finite() {
-            return Some(None);
-        }
-        let solid = bound.solid()?;
-        let point = self.hit_point(ray, bound.t, block, solid);
-        let (before, after) = if entering { (None, Some(block)) } else { (Some(block), None) };
-        Some(Some(Event {
-            t: bound.t,
-            point,
-            before,
-            after,
-            surface: Surface { block, solid },
-            entering,
-            normal: self.normal(block, solid, &point),
-            same_medium: false,
-        }))
-    }
-
-    /// Like [`Complex::collect_sets`] with no bound, but the walk stops at
-    /// the first interval end `T` after `after` among the blocks visited,
-    /// which it returns (`∞` if there is none): every block with an
-    /// interval meeting `[0, T]` is collected (its padded box is entered by
-    /// `T`), possibly with some farther ones. Every block visited gets an
-    /// entry, empty or not; those found in `previous` (the same ray's
-    /// sets, collected this way) are copied from it.
-    fn collect_sets_to_first_end(&self, ray: &Ray, after: f64, out: &mut Sets, previous: Option<&Sets>) -> f64 {
-        out.clear();
-        let eps = self.epsilon;
-        let mut push = |i: u32, intervals: &[Interval], t_max: &mut f64| {
-            for iv in out.push(BlockId(i), intervals, eps, true) {
-                for e in [iv.enter.t, iv.exit.t] {
-                    if e > after && e < *t_max {
-                        *t_max = e;
-                    }
-                }
-            }
-        };
-        let known = |i: u32| previous.and_then(|p| p.get(BlockId(i)));
-        let rb = RayBoxes::new(ray);
-        let mut t_max = f64::INFINITY;
-        let mut scratch = Spans::Empty;
-        for i in self.unbounded_crossed(&rb, 0.0, f64::INFINITY) {
-            match known(i) {
-                Some(ivs) => push(i, ivs, &mut t_max),
-                None => push(i, self.block_spans(i, ray, &rb, &mut scratch), &mut t_max),
-            }
-        }
-        self.bvh.traverse(&rb, 0.0, &mut t_max, |k, _, t_max| {
-            let i = self.kernel.block(k);
-            match known(i) {
-                Some(ivs) => push(i, ivs, t_max),
-                None => push(i, self.slot_spans(k, ray, &rb, &mut scratch), t_max),
-            }
-        });
-        out.sort();
-        t_max
-    }
-
-    /// [`Complex::partition_with`], with caller-provided buffers for the
-    /// sets and cuts.
-    fn partition_core(
-        &self,
-        ray: &Ray,
-        reach: f64,
-        (sets, cuts): (&mut Sets, &mut Vec<f64>),
-        until: f64,
-        events: Events,
-        out: &mut Partition,
-    ) {
-        self.collect_sets(ray, reach, sets);
-        self.partition_of_sets(ray, sets, cuts, until, events, out);
-    }
-
-    /// The partition formed from `sets` (sorted by block id), its events
-    /// only up to `until` (the segments up to the first one past it; all of
-    /// them, and no events, for `until = -∞`), and of those only the ones
-    /// `events` asks for.
-    fn partition_of_sets(
-        &self,
-        ray: &Ray,
-        sets: &mut Sets,
-        cuts: &mut Vec<f64>,
-        until: f64,
-        events: Events,
-        out: &mut Partition,
-    ) {
-        out.clear();
-        // The segments alone (a shadow ray's query), with at most one block:
-        // they alternate between nothing and the block at its interval
-        // ends, read off directly (the cuts below would give the same).
-        if until == f64::NEG_INFINITY && lone_segments(sets, &mut out.segments) {
-            return;
-        }
-        let gather = |sets: &Sets, cuts: &mut Vec<f64>| {
-            cuts.clear();
-            cuts.push(0.0);
-            for iv in &sets.intervals {
-                cuts.extend([iv.enter.t, iv.exit.t].into_iter().filter(|t| *t > 0.0 && t.is_finite()));
-            }
-            cuts.sort_unstable_by(f64::total_cmp);
-        };
-        gather(sets, cuts);
-        // Certified: ends of different blocks that their bounds cannot order
-        // are ordered exactly (a cold path, only when two ends are close).
-        if self.kernel.precision == quadric::Precision::Certified
-            && sets.len() > 1
-            && cuts.windows(2).any(|w| w[1] - w[0] <= crate::block::NEAR_TIE * w[1].abs())
-        {
-            let mut moved = sets.to_vec();
-            if crate::block::settle_block_ties(ray, &self.blocks, &mut moved) {
-                sets.assign(&moved);
-                gather(sets, cuts);
-            }
-        }
-        cuts.dedup();
-        // Past `until` only the first cut is needed: it ends the segment
-        // after an event at `until`.
-        if until > f64::NEG_INFINITY {
-            if let Some(k) = cuts.iter().position(|&c| c > until) {
-                cuts.truncate(k + 1);
-            }
-        }
-        cuts.push(f64::INFINITY);
-        for w in cuts.windows(2) {
-            let (a, b) = (w[0], w[1]);
-            // No end lies strictly inside (a, b), so each interval covers all
-            // of it or none. (A midpoint test would fail between adjacent floats.)
-            let owner = owner_of(
-                sets.iter()
-                    .filter(|(_, s)| s.iter().any(|iv| iv.enter.t <= a && b <= iv.exit.t))
-                    .map(|(id, _)| (id, self.blocks[id.index()].opacity())),
-            );
-            match out.segments.last_mut() {
-                Some(last) if last.owner == owner => last.end = b,
-                _ => out.segments.push(Segment { start: a, end: b, owner }),
-            }
-        }
-        let set_of = |id: BlockId| sets.get(id);
-        for w in out.segments.windows(2) {
-            let (s0, s1) = (w[0], w[1]);
-            let t = s1.start;
-            if t > until {
-                break;
-            }
-            // Prefer the entry of the new owner; else the exit of the old one.
-            let entry = s1.owner.and_then(|id| {
-                set_of(id)?
-                    .iter()
-                    .find(|iv| iv.enter.t == t)
-                    .and_then(|iv| iv.enter.solid())
-                    .map(|solid| (id, solid, true))
-            });
-            let exit = || {
-                s0.owner.and_then(|id| {
-                    set_of(id)?
-                        .iter()
-                        .find(|iv| iv.exit.t == t)
-                        .and_then(|iv| iv.exit.solid())
-                        .map(|solid| (id, solid, false))
-                })
-            };
-            let Some((block, solid, entering)) = entry.or_else(exit) else { continue };
-            let medium = |o: Option<BlockId>| {
-                o.map(|id| &self.blocks[id.index()]).filter(|b| b.is_transparent()).map(|b| b.material())
-            };
-            let same_medium = medium(s0.owner).is_some() && medium(s0.owner) == medium(s1.owner);
-            let interface = t > self.epsilon && !same_medium;
-            if events == Events::FirstInterface && !interface {
-                continue;
-            }
-            // The hit point's refinement and the normal: the event's dearest part.
-            let point = self.hit_point(ray, t, block, solid);
-            let normal = self.normal(block, solid, &point);
-            out.events.push(Event {
-                t,
-                point,
-                before: s0.owner,
-                after: s1.owner,
-                surface: Surface { block, solid },
-                entering,
-                normal,
-                same_medium,
-            });
-            if events == Events::FirstInterface {
-                break;
-            }
-        }
-    }
-}
-
-/// Which events [`Complex::partition_of_sets`] forms.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Events {
-    /// Every event (up to `until`): the partition's.
-    All,
-    /// Only the first after ε where the medium changes, the answer of
-    /// [`Complex::first_interface`] (`t > ε`, not [`Event::same_medium`]);
-    /// the others' hit points and normals are not computed.
-    FirstInterface,
 }
 
 /// The search state of [`Complex::cast_opaque`] for one ray: the nearest
@@ -1194,42 +804,4 @@ impl Nearest {
             }
         }
     }
-}
-
-/// The segments of the partition when at most one block has intervals
-/// (sorted, disjoint, never touching, each ending after 0): empty space up
-/// to each entry after 0, the block up to its exit, empty space after the
-/// last finite exit. `false`, with `segments` untouched, for more blocks.
-fn lone_segments(sets: &Sets, segments: &mut Vec<Segment>) -> bool {
-    let Some(lone) = sets.lone() else { return false };
-    let mut cursor = 0.0;
-    if let Some((id, intervals)) = lone {
-        for iv in intervals {
-            if iv.enter.t > cursor {
-                segments.push(Segment { start: cursor, end: iv.enter.t, owner: None });
-                cursor = iv.enter.t;
-            }
-            segments.push(Segment { start: cursor, end: iv.exit.t, owner: Some(id) });
-            cursor = iv.exit.t;
-        }
-    }
-    if cursor < f64::INFINITY {
-        segments.push(Segment { start: cursor, end: f64::INFINITY, owner: None });
-    }
-    true
-}
-
-/// The owner among the blocks containing a point (in priority order):
-/// the first opaque one, else the first transparent one.
-fn owner_of(containing: impl Iterator<Item = (BlockId, Opacity)>) -> Option<BlockId> {
-    let mut first_transparent = None;
-    for (id, opacity) in containing {
-        match opacity {
-            Opacity::Opaque => return Some(id),
-            Opacity::Transparent => {
-                first_transparent.get_or_insert(id);
-            }
-        }
-    }
-    first_transparent
 }
