@@ -55,7 +55,8 @@ pub struct Block {
     opacity: Opacity,
     material: MaterialKey,
     /// Every solid is convex, so a ray meets the block in at most one
-    /// interval: [`Block::spans`] then keeps two bounds instead of sets.
+    /// interval: [`Block::spans`] then keeps one [`ConvexSpan`] instead of
+    /// interval sets.
     convex: bool,
     /// The kernel's precision mode (set by [`Complex::set_precision`](crate::Complex::set_precision)).
     precision: Precision,
@@ -422,10 +423,10 @@ impl<'a> From<&'a Solid> for SolidRef<'a> {
     }
 }
 
-/// The intervals of a block of convex solids, given in block order: the
-/// running intersection kept as two bounds, found by the same comparisons in
-/// the same order as `IntervalSet::intersect` (on equal `t` the earlier
-/// solid's end is kept), so the bounds and their solid tags are those of
+/// The intervals of a block of convex solids, given in block order: their
+/// running intersection as one [`ConvexSpan`], narrowed by the same
+/// comparisons in the same order as `IntervalSet::intersect` (on equal `t`
+/// the earlier solid's end is kept), so the bounds and their solid tags are those of
 /// [`Block::intervals`]' set path. `None` if a quadric gave more than one
 /// interval after all, or in `Precision::Certified` (then the caller takes
 /// the general path, which settles ties between solids exactly).
@@ -439,38 +440,39 @@ pub(crate) fn convex_spans<'a>(
         // Ties between solids are settled exactly on the general path.
         return None;
     }
-    let mut meet = Meet::ALL;
+    let mut span = ConvexSpan::ALL;
     for (i, s) in solids.enumerate() {
-        let met = match s {
+        let non_empty = match s {
             SolidRef::HalfSpace(h) => {
                 let (e, x) = h.interval_with(ray, i as u32, precision);
-                meet.with(e, x)
+                span.narrow(e, x)
             }
-            SolidRef::Quadric(q) => meet.with_pieces(&q.pieces_with(ray, i as u32, precision))?,
+            SolidRef::Quadric(q) => span.narrow_pieces(&q.pieces_with(ray, i as u32, precision))?,
         };
-        if !met {
+        if !non_empty {
             return Some(Spans::Empty);
         }
     }
-    Some(meet.spans())
+    Some(span.spans())
 }
 
-/// The running intersection of convex solids' intervals, given in block
-/// order: two bounds, narrowed by the same comparisons in the same order as
+/// The span of a convex block along a ray: the running intersection of its
+/// solids' intervals, given in block order, one span narrowed solid by
+/// solid. Two bounds, narrowed by the same comparisons in the same order as
 /// `IntervalSet::intersect` (on equal `t` the earlier solid's end is kept).
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Meet {
+pub(crate) struct ConvexSpan {
     enter: Bound,
     exit: Bound,
 }
 
-impl Meet {
+impl ConvexSpan {
     /// The whole ray, `[0, ∞)`.
-    pub(crate) const ALL: Meet = Meet { enter: Bound::free(0.0), exit: Bound::free(f64::INFINITY) };
+    pub(crate) const ALL: ConvexSpan = ConvexSpan { enter: Bound::free(0.0), exit: Bound::free(f64::INFINITY) };
 
     /// Narrows to the next solid's interval `[e, x]`; `false` once empty.
     #[inline(always)]
-    pub(crate) fn with(&mut self, e: Bound, x: Bound) -> bool {
+    pub(crate) fn narrow(&mut self, e: Bound, x: Bound) -> bool {
         if e.t > self.enter.t {
             self.enter = e;
         }
@@ -482,17 +484,17 @@ impl Meet {
     }
 
     /// Narrows to a convex solid's pieces: `Some(false)` once empty (no
-    /// piece, or an empty meet), `None` if there are two pieces after all.
+    /// piece, or an empty span), `None` if there are two pieces after all.
     #[inline(always)]
-    pub(crate) fn with_pieces(&mut self, pieces: &Pieces) -> Option<bool> {
+    pub(crate) fn narrow_pieces(&mut self, pieces: &Pieces) -> Option<bool> {
         match *pieces.as_slice() {
             [] => Some(false),
-            [iv] => Some(self.with(iv.enter, iv.exit)),
+            [iv] => Some(self.narrow(iv.enter, iv.exit)),
             _ => None,
         }
     }
 
-    /// The interval, non-empty as long as every [`Meet::with`] said so.
+    /// The interval, non-empty as long as every [`ConvexSpan::narrow`] said so.
     #[inline(always)]
     pub(crate) fn spans(self) -> Spans {
         Spans::One(Interval::new(self.enter, self.exit))

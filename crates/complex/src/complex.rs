@@ -7,7 +7,7 @@ use crate::block::{SolidRef, Spans};
 use crate::bounds::block_boxes;
 use crate::bvh::{Bvh, RayBoxes, RayBoxes4};
 use crate::kernel::Kernel;
-use crate::partition::{Event, Sets};
+use crate::partition::{BlockSpans, Event};
 use crate::{Aabb, Block, BlockId, ComplexError};
 
 /// The default ε relative to the scene's size: `ε = DEFAULT_RELATIVE_EPSILON · D`
@@ -157,7 +157,7 @@ impl Complex {
         self.kernel.precision
     }
 
-    /// Sets the precision mode of every query (`cast_ray`, `occluded`,
+    /// BlockSpans the precision mode of every query (`cast_ray`, `occluded`,
     /// `partition`, `intervals`, `block_intervals`; `contains_point`
     /// evaluates `f` at the point, the same in every mode).
     pub fn set_precision(&mut self, precision: quadric::Precision) {
@@ -251,8 +251,8 @@ impl Complex {
 
     /// `spans` within the range `[lo, hi]` where the ray is in block `i`'s
     /// padded box, the same range the box probes of the queries test: so
-    /// every `t` of a set is found by a probe at `t`, and the partition and
-    /// `cast_ray` see the same sets. The common case (nothing outside) is two
+    /// every `t` of a block's spans is found by a probe at `t`, and the
+    /// partition and `cast_ray` see the same spans. The common case (nothing outside) is two
     /// comparisons after the slab test.
     #[inline(always)]
     fn clip_to_box(&self, i: u32, spans: &mut Spans, ray: &Ray, rb: &RayBoxes) {
@@ -300,20 +300,20 @@ impl Complex {
     /// The interval set of each block the ray meets, with intervals inside
     /// `[0, ε]` removed, in priority order.
     pub fn intervals(&self, ray: &Ray) -> Vec<(BlockId, IntervalSet)> {
-        let mut out = Sets::default();
-        self.collect_sets(ray, f64::INFINITY, &mut out);
+        let mut out = BlockSpans::default();
+        self.collect_spans(ray, f64::INFINITY, &mut out);
         out.to_vec()
     }
 
-    /// The non-empty sets (after the ε rule) of the blocks whose boxes the ray
+    /// The non-empty spans (after the ε rule) of the blocks whose boxes the ray
     /// crosses before `max_t`, sorted by block id.
     ///
     /// The walk starts at `min(ε, max_t)`, not at 0: a block whose padded
     /// box the ray has left by then (the one a secondary ray leaves, if
     /// thin) has its intervals clipped to that box ([`Complex::clip_to_box`],
     /// the same slabs as the walk's), so they all end before ε and the ε
-    /// rule would remove every one of them. The sets are the same.
-    pub(crate) fn collect_sets(&self, ray: &Ray, max_t: f64, out: &mut Sets) {
+    /// rule would remove every one of them. The spans are the same.
+    pub(crate) fn collect_spans(&self, ray: &Ray, max_t: f64, out: &mut BlockSpans) {
         out.clear();
         let eps = self.epsilon;
         let mut push = |i: u32, spans: &[Interval]| {
@@ -332,19 +332,19 @@ impl Complex {
         out.sort();
     }
 
-    /// Like [`Complex::collect_sets`] with no bound, but the walk stops at
+    /// Like [`Complex::collect_spans`] with no bound, but the walk stops at
     /// the first interval end `T` after `after` among the blocks visited,
     /// which it returns (`∞` if there is none): every block with an
     /// interval meeting `[0, T]` is collected (its padded box is entered by
     /// `T`), possibly with some farther ones. Every block visited gets an
     /// entry, empty or not; those found in `previous` (the same ray's
-    /// sets, collected this way) are copied from it.
-    pub(crate) fn collect_sets_to_first_end(
+    /// spans, collected this way) are copied from it.
+    pub(crate) fn collect_spans_to_first_end(
         &self,
         ray: &Ray,
         after: f64,
-        out: &mut Sets,
-        previous: Option<&Sets>,
+        out: &mut BlockSpans,
+        previous: Option<&BlockSpans>,
     ) -> f64 {
         out.clear();
         let eps = self.epsilon;
@@ -603,15 +603,15 @@ impl Complex {
     ) -> Option<Hit> {
         let entry = after.and_then(|id| {
             let mut scratch = Spans::Empty;
-            let set = self.block_spans(id.0, ray, rb, &mut scratch);
-            let solid = set.iter().find(|iv| iv.enter.t == t)?.enter.solid()?;
+            let spans = self.block_spans(id.0, ray, rb, &mut scratch);
+            let solid = spans.iter().find(|iv| iv.enter.t == t)?.enter.solid()?;
             Some(self.hit(ray, t, id.0, solid, true))
         });
         entry.or_else(|| {
             let id = before?;
             let mut scratch = Spans::Empty;
-            let set = self.block_spans(id.0, ray, rb, &mut scratch);
-            let solid = set.iter().find(|iv| iv.exit.t == t)?.exit.solid()?;
+            let spans = self.block_spans(id.0, ray, rb, &mut scratch);
+            let solid = spans.iter().find(|iv| iv.exit.t == t)?.exit.solid()?;
             Some(self.hit(ray, t, id.0, solid, false))
         })
     }

@@ -14,7 +14,7 @@
 
 use quadric::{HalfSpace, Precision, Quadric, Ray, Rebased, Solid};
 
-use crate::block::{Meet, SolidRef, Spans};
+use crate::block::{ConvexSpan, SolidRef, Spans};
 use crate::bounds::Ball;
 use crate::Block;
 
@@ -285,24 +285,24 @@ impl Kernel {
     #[inline(always)]
     fn packed_spans<const FAST: bool>(&self, slot: &Slot, ray: &Ray) -> Option<Spans> {
         let precision = if FAST { Precision::Fast } else { Precision::Accurate };
-        let (mut meet, mut f, mut q) = (Meet::ALL, slot.face as usize, slot.quadric as usize);
+        let (mut span, mut f, mut q) = (ConvexSpan::ALL, slot.face as usize, slot.quadric as usize);
         let mut at: Option<([u64; 3], Rebased)> = None;
         let mut i = 0;
         while i < slot.count {
-            let met = if slot.quadric_mask & (1 << i) != 0 {
+            let non_empty = if slot.quadric_mask & (1 << i) != 0 {
                 q += 1;
-                meet.with_pieces(&self.quadrics[q - 1].0.pieces_with(ray, i, precision))?
+                span.narrow_pieces(&self.quadrics[q - 1].0.pieces_with(ray, i, precision))?
             } else {
                 let Face { half_space: h, opposite } = &self.faces[f];
                 f += 1;
                 let pair = slot.pair_mask & (1 << i) != 0;
                 if FAST {
                     let (e, x) = h.interval_with(ray, i, precision);
-                    meet.with(e, x)
+                    span.narrow(e, x)
                         && (!pair || {
                             i += 1;
                             let (e, x) = self.seconds[f - 1].interval_with(ray, i, precision);
-                            meet.with(e, x)
+                            span.narrow(e, x)
                         })
                 } else {
                     let o = h.reference_point();
@@ -314,19 +314,19 @@ impl Kernel {
                     if pair {
                         let [(e0, x0), (e1, x1)] = h.slab_intervals(*opposite, ray, &rebased, i);
                         i += 1;
-                        meet.with(e0, x0) && meet.with(e1, x1)
+                        span.narrow(e0, x0) && span.narrow(e1, x1)
                     } else {
                         let (e, x) = h.interval_rebased(ray, &rebased, i);
-                        meet.with(e, x)
+                        span.narrow(e, x)
                     }
                 }
             };
-            if !met {
+            if !non_empty {
                 return Some(Spans::Empty);
             }
             i += 1;
         }
-        Some(meet.spans())
+        Some(span.spans())
     }
 }
 

@@ -84,24 +84,25 @@ const BOUNDED_TRIES: usize = 3;
 /// on a thread it allocates only if `out` must grow.
 #[derive(Default)]
 struct Scratch {
-    sets: Sets,
-    /// The sets of [`Complex::first_interface`]'s previous try.
-    previous: Sets,
+    spans: BlockSpans,
+    /// The spans of [`Complex::first_interface`]'s previous try.
+    previous: BlockSpans,
     cuts: Vec<f64>,
 }
 
-/// The blocks' interval sets along one ray, stored flat: a set is a run of
-/// `intervals`, so collecting a block costs a copy of its few intervals, not
-/// of a whole fixed-capacity `IntervalSet` (several hundred bytes, copied
-/// two or three times on the way into a vector and again by its sort).
+/// The blocks' spans along one ray, stored flat: a block's spans are a run
+/// of `intervals`, so collecting a block costs a copy of its few intervals,
+/// not of a whole fixed-capacity `IntervalSet` (several hundred bytes,
+/// copied two or three times on the way into a vector and again by its
+/// sort).
 #[derive(Debug, Default)]
-pub(crate) struct Sets {
+pub(crate) struct BlockSpans {
     /// `(block, first interval, count)`, sorted by block once collected.
     blocks: Vec<(BlockId, u32, u32)>,
     intervals: Vec<Interval>,
 }
 
-impl Sets {
+impl BlockSpans {
     pub(crate) fn clear(&mut self) {
         self.blocks.clear();
         self.intervals.clear();
@@ -133,7 +134,7 @@ impl Sets {
         self.blocks.len()
     }
 
-    /// The sets in priority order.
+    /// Each block's spans, in priority order.
     fn iter(&self) -> impl Iterator<Item = (BlockId, &[Interval])> + '_ {
         self.blocks.iter().map(|&(id, first, n)| (id, &self.intervals[first as usize..(first + n) as usize]))
     }
@@ -161,7 +162,7 @@ impl Sets {
             .collect()
     }
 
-    /// Replaces the sets by `sets` (sorted by block).
+    /// Replaces the spans by the interval sets `sets` (sorted by block).
     fn assign(&mut self, sets: &[(BlockId, IntervalSet)]) {
         self.clear();
         for (id, set) in sets {
@@ -223,14 +224,16 @@ impl Complex {
 
     /// The partition formed from the blocks whose boxes the ray crosses
     /// before `reach`, with its events up to `until` (see
-    /// `partition_of_sets`).
+    /// `partition_of_spans`).
     fn partition_with(&self, ray: &Ray, reach: f64, until: f64, out: &mut Partition) {
         SCRATCH.with(|s| match s.try_borrow_mut() {
             Ok(mut s) => {
-                let Scratch { sets, cuts, .. } = &mut *s;
-                self.partition_core(ray, reach, (sets, cuts), until, Events::All, out);
+                let Scratch { spans, cuts, .. } = &mut *s;
+                self.partition_core(ray, reach, (spans, cuts), until, Events::All, out);
             }
-            Err(_) => self.partition_core(ray, reach, (&mut Sets::default(), &mut Vec::new()), until, Events::All, out),
+            Err(_) => {
+                self.partition_core(ray, reach, (&mut BlockSpans::default(), &mut Vec::new()), until, Events::All, out)
+            }
         });
     }
 
@@ -257,24 +260,24 @@ impl Complex {
         let found = |out: &Partition| out.events.first().copied();
         SCRATCH.with(|s| match s.try_borrow_mut() {
             Ok(mut s) => {
-                let Scratch { sets, previous, cuts } = &mut *s;
+                let Scratch { spans, previous, cuts } = &mut *s;
                 let mut after = eps;
                 for attempt in 0..BOUNDED_TRIES {
                     // A retry meets the blocks of the last try again: their
-                    // sets are taken from it, not computed anew. (Not in
+                    // spans are taken from it, not computed anew. (Not in
                     // Certified, whose settlement may have moved them.)
                     let reuse = attempt > 0 && self.precision() != quadric::Precision::Certified;
                     if reuse {
-                        core::mem::swap(sets, previous);
+                        core::mem::swap(spans, previous);
                     }
-                    let until = self.collect_sets_to_first_end(ray, after, sets, reuse.then_some(&*previous));
+                    let until = self.collect_spans_to_first_end(ray, after, spans, reuse.then_some(&*previous));
                     if attempt == 0 && self.precision() != quadric::Precision::Certified {
-                        if let Some(answer) = self.lone_interface(ray, sets) {
+                        if let Some(answer) = self.lone_interface(ray, spans) {
                             out.clear();
                             return answer;
                         }
                     }
-                    self.partition_of_sets(ray, sets, cuts, until, Events::FirstInterface, out);
+                    self.partition_of_spans(ray, spans, cuts, until, Events::FirstInterface, out);
                     // Events are formed only up to `until`, where they are
                     // exact. With `until = ∞` nothing was cut off.
                     let e = found(out);
@@ -283,11 +286,11 @@ impl Complex {
                     }
                     after = until;
                 }
-                self.partition_core(ray, f64::INFINITY, (sets, cuts), f64::INFINITY, Events::FirstInterface, out);
+                self.partition_core(ray, f64::INFINITY, (spans, cuts), f64::INFINITY, Events::FirstInterface, out);
                 found(out)
             }
             Err(_) => {
-                let buffers = (&mut Sets::default(), &mut Vec::new());
+                let buffers = (&mut BlockSpans::default(), &mut Vec::new());
                 self.partition_core(ray, f64::INFINITY, buffers, f64::INFINITY, Events::FirstInterface, out);
                 found(out)
             }
@@ -304,10 +307,10 @@ impl Complex {
     /// partition's event at an end `t > 0` is `B`'s entry or exit there if
     /// the end is tagged with a solid, and none otherwise. So the answer is
     /// the first end after ε: `None` if it is infinite (the ray stays in
-    /// `B`), the event formed exactly as `partition_of_sets` forms it if it
+    /// `B`), the event formed exactly as `partition_of_spans` forms it if it
     /// is tagged, the general path if it is not.
-    fn lone_interface(&self, ray: &Ray, sets: &Sets) -> Option<Option<Event>> {
-        let Some((block, intervals)) = sets.lone()? else { return Some(None) };
+    fn lone_interface(&self, ray: &Ray, spans: &BlockSpans) -> Option<Option<Event>> {
+        let Some((block, intervals)) = spans.lone()? else { return Some(None) };
         let eps = self.epsilon();
         let (bound, entering) =
             intervals.iter().flat_map(|iv| [(iv.enter, true), (iv.exit, false)]).find(|(b, _)| b.t > eps)?;
@@ -330,28 +333,28 @@ impl Complex {
     }
 
     /// [`Complex::partition_with`], with caller-provided buffers for the
-    /// sets and cuts.
+    /// spans and cuts.
     fn partition_core(
         &self,
         ray: &Ray,
         reach: f64,
-        (sets, cuts): (&mut Sets, &mut Vec<f64>),
+        (spans, cuts): (&mut BlockSpans, &mut Vec<f64>),
         until: f64,
         events: Events,
         out: &mut Partition,
     ) {
-        self.collect_sets(ray, reach, sets);
-        self.partition_of_sets(ray, sets, cuts, until, events, out);
+        self.collect_spans(ray, reach, spans);
+        self.partition_of_spans(ray, spans, cuts, until, events, out);
     }
 
-    /// The partition formed from `sets` (sorted by block id), its events
+    /// The partition formed from `spans` (sorted by block id), its events
     /// only up to `until` (the segments up to the first one past it; all of
     /// them, and no events, for `until = -∞`), and of those only the ones
     /// `events` asks for.
-    fn partition_of_sets(
+    fn partition_of_spans(
         &self,
         ray: &Ray,
-        sets: &mut Sets,
+        spans: &mut BlockSpans,
         cuts: &mut Vec<f64>,
         until: f64,
         events: Events,
@@ -361,28 +364,28 @@ impl Complex {
         // The segments alone (a shadow ray's query), with at most one block:
         // they alternate between nothing and the block at its interval
         // ends, read off directly (the cuts below would give the same).
-        if until == f64::NEG_INFINITY && lone_segments(sets, &mut out.segments) {
+        if until == f64::NEG_INFINITY && lone_segments(spans, &mut out.segments) {
             return;
         }
-        let gather = |sets: &Sets, cuts: &mut Vec<f64>| {
+        let gather = |spans: &BlockSpans, cuts: &mut Vec<f64>| {
             cuts.clear();
             cuts.push(0.0);
-            for iv in &sets.intervals {
+            for iv in &spans.intervals {
                 cuts.extend([iv.enter.t, iv.exit.t].into_iter().filter(|t| *t > 0.0 && t.is_finite()));
             }
             cuts.sort_unstable_by(f64::total_cmp);
         };
-        gather(sets, cuts);
+        gather(spans, cuts);
         // Certified: ends of different blocks that their bounds cannot order
         // are ordered exactly (a cold path, only when two ends are close).
         if self.precision() == quadric::Precision::Certified
-            && sets.len() > 1
+            && spans.len() > 1
             && cuts.windows(2).any(|w| w[1] - w[0] <= crate::block::NEAR_TIE * w[1].abs())
         {
-            let mut moved = sets.to_vec();
+            let mut moved = spans.to_vec();
             if crate::block::settle_block_ties(ray, self.blocks(), &mut moved) {
-                sets.assign(&moved);
-                gather(sets, cuts);
+                spans.assign(&moved);
+                gather(spans, cuts);
             }
         }
         cuts.dedup();
@@ -399,7 +402,8 @@ impl Complex {
             // No end lies strictly inside (a, b), so each interval covers all
             // of it or none. (A midpoint test would fail between adjacent floats.)
             let owner = owner_of(
-                sets.iter()
+                spans
+                    .iter()
                     .filter(|(_, s)| s.iter().any(|iv| iv.enter.t <= a && b <= iv.exit.t))
                     .map(|(id, _)| (id, self.block(id).opacity())),
             );
@@ -408,7 +412,7 @@ impl Complex {
                 _ => out.segments.push(Segment { start: a, end: b, owner }),
             }
         }
-        let set_of = |id: BlockId| sets.get(id);
+        let spans_of = |id: BlockId| spans.get(id);
         for w in out.segments.windows(2) {
             let (s0, s1) = (w[0], w[1]);
             let t = s1.start;
@@ -417,7 +421,7 @@ impl Complex {
             }
             // Prefer the entry of the new owner; else the exit of the old one.
             let entry = s1.owner.and_then(|id| {
-                set_of(id)?
+                spans_of(id)?
                     .iter()
                     .find(|iv| iv.enter.t == t)
                     .and_then(|iv| iv.enter.solid())
@@ -425,7 +429,7 @@ impl Complex {
             });
             let exit = || {
                 s0.owner.and_then(|id| {
-                    set_of(id)?
+                    spans_of(id)?
                         .iter()
                         .find(|iv| iv.exit.t == t)
                         .and_then(|iv| iv.exit.solid())
@@ -460,7 +464,7 @@ impl Complex {
     }
 }
 
-/// Which events [`Complex::partition_of_sets`] forms.
+/// Which events [`Complex::partition_of_spans`] forms.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Events {
     /// Every event (up to `until`): the partition's.
@@ -475,8 +479,8 @@ enum Events {
 /// (sorted, disjoint, never touching, each ending after 0): empty space up
 /// to each entry after 0, the block up to its exit, empty space after the
 /// last finite exit. `false`, with `segments` untouched, for more blocks.
-fn lone_segments(sets: &Sets, segments: &mut Vec<Segment>) -> bool {
-    let Some(lone) = sets.lone() else { return false };
+fn lone_segments(spans: &BlockSpans, segments: &mut Vec<Segment>) -> bool {
+    let Some(lone) = spans.lone() else { return false };
     let mut cursor = 0.0;
     if let Some((id, intervals)) = lone {
         for iv in intervals {
