@@ -426,10 +426,11 @@ impl<'a> From<&'a Solid> for SolidRef<'a> {
 /// The intervals of a block of convex solids, given in block order: their
 /// running intersection as one [`ConvexSpan`], narrowed by the same
 /// comparisons in the same order as `IntervalSet::intersect` (on equal `t`
-/// the earlier solid's end is kept), so the bounds and their solid tags are those of
-/// [`Block::intervals`]' set path. `None` if a quadric gave more than one
-/// interval after all, or in `Precision::Certified` (then the caller takes
-/// the general path, which settles ties between solids exactly).
+/// the earlier solid's end is kept), so the bounds and their solid tags
+/// are those of [`Block::intervals`]' set path. `None` if a quadric gave
+/// more than one interval after all, or in `Precision::Certified` (then the
+/// caller takes the general path, which settles ties between solids
+/// exactly).
 #[inline(always)]
 pub(crate) fn convex_spans<'a>(
     ray: &Ray,

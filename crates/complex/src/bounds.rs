@@ -204,7 +204,7 @@ pub(crate) fn block_bounds(solids: &[Solid]) -> (Aabb, Option<Ball>) {
     // its volume, a long upright cylinder's far more) would cost its test
     // on every visit and reject almost nothing the box has not. Below 1.5
     // times the box, the grid's turned boxes and cylinders keep nearly all
-    // their gain and the table nothing (`docs/benchmarks.md`, sixth session).
+    // their gain and the table nothing (`docs/benchmarks.md`).
     let volume = (0..3).map(|i| bx.max[i] - bx.min[i]).product::<f64>();
     let ball = ball.filter(|b| 4.0 / 3.0 * std::f64::consts::PI * b.radius.powi(3) < 1.5 * volume);
     (bx, ball)
@@ -327,12 +327,12 @@ enum Core {
 ///
 /// Not nalgebra's `symmetric_eigen`: for some matrices it pairs eigenvalues
 /// with the wrong eigenvectors (dimforge/nalgebra#1109; a circular double
-/// cone with eigenvalues -2, 2, 2 came back with its axis off by 30°, so the
-/// box cut off part of the block). Jacobi is backward stable, with errors of
-/// a few ε·‖A‖, and structural zeros stay exact: a diagonal `A` needs no
-/// rotation. The result is checked a posteriori anyway, since every margin
-/// below assumes the residual `‖AV - VΛ‖` and `‖VᵀV - I‖` are that small;
-/// the caller falls back to propagation alone if they are not.
+/// cone with eigenvalues -2, 2, 2 comes back with its axis off by 30°, and
+/// the box would cut off part of the block). Jacobi is backward stable,
+/// with errors of a few ε·‖A‖, and structural zeros stay exact: a diagonal
+/// `A` needs no rotation. The result is checked a posteriori anyway, since
+/// every margin below assumes the residual `‖AV - VΛ‖` and `‖VᵀV - I‖` are
+/// that small; the caller falls back to propagation alone if they are not.
 fn symmetric_eigen(a: &Matrix3<f64>) -> Option<(Vector3<f64>, Matrix3<f64>)> {
     let norm = a.norm();
     if !norm.is_finite() {
@@ -864,8 +864,8 @@ mod tests {
 
     use super::*;
 
-    /// `axial_range` as it was before a flat cross-section's square root
-    /// was taken once (the square root at every step of the same search):
+    /// `axial_range` with the square root taken at every step of the search,
+    /// also for a flat cross-section (where `axial_range` takes it once):
     /// the oracle of `axial_range_is_the_per_step_one`.
     fn axial_range_per_step(
         h: &quadric::HalfSpace,

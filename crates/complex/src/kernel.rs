@@ -1,7 +1,7 @@
 //! Per-block ray data in BVH leaf order, laid out for the cache.
 //!
 //! A block's solids live in its own heap buffer, as `Solid` values sized for
-//! the larger quadric; reaching them from a BVH leaf took three dependent
+//! the larger quadric; reaching them from a BVH leaf takes three dependent
 //! cache misses per block (leaf entry, `Block`, solids) and, for a rotated
 //! box, thirteen cache lines of solids. Here the blocks of one leaf are
 //! neighbours: a slot per block in leaf order, and the half-spaces (as
@@ -160,8 +160,8 @@ impl Kernel {
         // by `Block::spans`.
         let packed = |block: &Block| block.is_convex() && block.solids().len() <= 32;
         // The arrays' sizes up front: grown by doubling, the 100,000-block
-        // grid's 28 MB of solids took 107 MB of allocations (fresh pages and
-        // a copy each time).
+        // grid's 28 MB of solids would take 107 MB of allocations (fresh
+        // pages and a copy each time).
         let (mut faces, mut quadrics) = (0, 0);
         for &id in order {
             let block = &blocks[id as usize];

@@ -105,10 +105,10 @@ fn unbounded_and_empty_blocks() {
 
 /// An elliptic paraboloid whose linear coefficient along its axis is tiny
 /// against the others (1e-45 after a scale of 1e46 along z), far from its
-/// centre: once boxed as the cylinder of its cross-section at the centre,
-/// which cut off most of the solid (found by `fuzz-kernel`). Its box must
-/// hold its points, and `contains_point` must find them; capped, the box is
-/// bounded again and still holds the points.
+/// centre (a `fuzz-kernel` input): boxed as the cylinder of its
+/// cross-section at the centre, it would lose most of the solid. Its box
+/// must hold its points, and `contains_point` must find them; capped, the
+/// box is bounded again and still holds the points.
 #[test]
 fn paraboloid_with_a_tiny_linear_term_far_along_its_axis() {
     let q = Quadric::from_coefficients([485.890625, 1.890625, 0.0, 0.0, 0.0, 0.0, 3.0, 0.0, 1.0, 0.0])
@@ -135,8 +135,9 @@ fn paraboloid_with_a_tiny_linear_term_far_along_its_axis() {
 /// terms of about 1.16, 7.7e7 from the centre (a case `fuzz-kernel` found):
 /// the computed `f` is negative some units either side of the exact roots,
 /// and every point where it is must be in the box and found by
-/// `contains_point`. (The box's margin was a multiple of the roots' scale,
-/// 0.15 here, where near a double root rounding moves them by `sqrt(δ)/a`.)
+/// `contains_point`. (A margin that is a multiple of the roots' scale, 0.15
+/// here, is too small: near a double root rounding moves them by
+/// `sqrt(δ)/a`.)
 #[test]
 fn slab_of_a_nearly_tangent_quadric_holds_every_point_computed_inside() {
     let (a, g, k) = (1.9432328745988104e-16, -1.5019182485790364e-8, 1.16082763671875);

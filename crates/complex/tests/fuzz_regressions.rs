@@ -1,5 +1,6 @@
 //! Minimised inputs from the `complex_queries` fuzz target (`fuzz/`), one
-//! test each: the shape of the input that failed and the law it broke.
+//! test each: the shape of the input, the law it tests and what would break
+//! it.
 
 use complex::{BlockId, Complex};
 use proptest::prelude::*;
@@ -18,9 +19,9 @@ fn far_tilted_tube(shift: f64, degrees: f64) -> Vec<Solid> {
 }
 
 /// The block box must hold every point of the block: an eigenvector solver
-/// returned the tube's axis as exactly z (the tilt, far below its tolerance,
-/// was lost), so the box was bounded in y around the far centre and the BVH
-/// path missed the tube at the origin.
+/// returns the tube's axis as exactly z (the tilt is far below its
+/// tolerance), and a box bounded in y around the far centre would hide the
+/// tube at the origin from the BVH path.
 #[test]
 fn tilted_tube_is_unbounded_across_its_axis() {
     for (shift, degrees) in [(1e20, 1e-14), (-1e300, 4.667261458384588e-62), (1e12, 1e-7)] {
@@ -52,7 +53,7 @@ fn straight_far_tube_stays_bounded_across_its_axis() {
 /// for fixed `y < 0` it holds for all large enough `x`, so the solid is
 /// non-empty and unbounded. Its `A` has one eigenvalue of about -0.1 next to
 /// 8e45, far below the eigen solver's rounding (about 1e30): computed as
-/// positive, it made the quadric an "empty cylinder" and the box empty.
+/// positive, it would make the quadric an "empty cylinder" and the box empty.
 #[test]
 fn eigenvalue_lost_in_rounding_keeps_the_box_conservative() {
     let c = [
@@ -83,8 +84,8 @@ fn eigenvalue_lost_in_rounding_keeps_the_box_conservative() {
 /// it: the kernel puts the exit at 4.4e-16 (an ulp of the origin's
 /// coordinates, within its stated accuracy), just outside the block's exact
 /// box, and with a degenerate second block ε is 1e-106. The partition (which
-/// meets the box at t = 0) had the exit event; `cast_ray`, probing the boxes
-/// at t = ε, missed the block and returned nothing.
+/// meets the box at t = 0) has the exit event; `cast_ray`, probing the boxes
+/// at t = ε, must find it too.
 #[test]
 fn cast_ray_finds_an_exit_just_outside_the_exact_box() {
     let point_block = vec![Solid::from(Quadric::paraboloid()), hs(0.0, 1.0, 0.0, -2.0), hs(0.0, 43.0, 0.0, 0.0)];
@@ -99,11 +100,11 @@ fn cast_ray_finds_an_exit_just_outside_the_exact_box() {
 /// The degenerate slab `y² <= 0` (the plane y = 0, no interior): the kernel
 /// gives a sliver of length 6e-8 around the crossing (the square root of a
 /// rounding-level discriminant), which lies outside the block's exact box
-/// (`|y| <=` 1e-308). The partition (which meets the box at the crossing)
-/// had the sliver's events; `cast_ray` with a transparent block present
-/// probed the boxes at the sliver's ends and missed it. Every query now reads
-/// a block's set clipped to its box (`Complex::block_intervals`), so both
-/// see the same (clipped) sliver.
+/// (`|y| <=` 1e-308). The partition meets the box at the crossing;
+/// `cast_ray` with a transparent block present probes the boxes at the
+/// sliver's ends, which lie outside it. Every query reads a block's set
+/// clipped to its box (`Complex::block_intervals`), so both see the same
+/// (clipped) sliver.
 #[test]
 fn cast_ray_agrees_with_the_partition_on_a_zero_thickness_slab() {
     let slab = vec![Solid::from(
@@ -122,12 +123,12 @@ fn cast_ray_agrees_with_the_partition_on_a_zero_thickness_slab() {
 /// after the move by (4, 12, 4), with a radius of 1.35e28). The plane `y = 0`
 /// was first moved 59 along itself, so its reference point ends up 8e29 away
 /// (in z); the half-space kernel is accurate to the ulps of that distance
-/// (1e14), and it put the ray origin (y = 0) inside. The partition (which
-/// crosses the block's box from t = 0) then started inside the block and
-/// had only the exit at t = 1.36e28; `cast_ray`, probing the box (y >=
-/// 11.99…) at t = ε, found the ray outside and returned nothing. With the
-/// sets clipped to the boxes both see the entry at y = 12 (t = 4√409, to the
-/// box's widening) and then the exit.
+/// (1e14), and puts the ray origin (y = 0) inside. Unclipped, the partition
+/// (which crosses the block's box from t = 0) would start inside the block
+/// with only the exit at t = 1.36e28, while `cast_ray`, probing the box
+/// (y >= 11.99…) at t = ε, finds the ray outside. With the sets clipped to
+/// the boxes both see the entry at y = 12 (t = 4√409, to the box's
+/// widening) and then the exit.
 #[test]
 fn cast_ray_and_partition_agree_on_a_far_referenced_half_space() {
     let m = Transform::scale(-1.3476555094338099e28).expect("finite").then(&translate(4.0, 12.0, 4.0));
@@ -151,10 +152,10 @@ fn cast_ray_and_partition_agree_on_a_far_referenced_half_space() {
     assert_eq!(c.contains_point(&r.at(1.0)), None, "the ray starts below y = 12");
 }
 
-/// The two bugs above are one class: the kernel puts part of a block's set
+/// The two cases above are one class: the kernel puts part of a block's set
 /// outside the block's exact box (a √ε sliver of a degenerate quadric, a
-/// crossing of a half-space whose reference point is far away), and a query
-/// that probes the boxes disagreed with one that does not.
+/// crossing of a half-space whose reference point is far away), where a
+/// query that probes the boxes could disagree with one that does not.
 fn box_escaping_solid() -> impl Strategy<Value = Solid> {
     let axis = 0usize..3;
     // `x_i² <= 0` (or a slab of half-width 1e-9), placed anywhere.
@@ -245,13 +246,12 @@ fn a_rotated_tube_keeps_an_unbounded_box_and_its_far_exit() {
     assert!(!hit.entering && (hit.t - expected).abs() < 16.0 * f64::EPSILON * 1e9, "{hit:?} vs {expected}");
 }
 
-/// Found by `complex_queries` after the fixes above (2026-11-30): the block
-/// box must hold every point of the block. The origin lies on a sphere of
-/// radius 8.2e35 centred 8.2e35 away (rotated by 8.2e35° twice), inside a
-/// tube along y and on a half-space's plane. Narrowing the tube's box by the
+/// The block box must hold every point of the block. The origin lies on a
+/// sphere of radius 8.2e35 centred 8.2e35 away (rotated by 8.2e35° twice),
+/// inside a tube along y and on a half-space's plane. Narrowing the tube's box by the
 /// sphere, `C = k + a Σ dⱼ²` cancels to rounding noise (`dⱼ ≈ 8e35` rounded
-/// at 1e20), and the emptiness margin was relative to `|a C|` itself, not to
-/// the magnitudes `C` was formed from: the box came out empty.
+/// at 1e20): the emptiness margin must be relative to the magnitudes `C` is
+/// formed from, not to `|a C|` itself, or the box comes out empty.
 #[test]
 fn the_box_holds_a_point_on_a_huge_sphere() {
     let rot = Transform::rotate_y_degrees(8.224e35).expect("finite");

@@ -24,7 +24,8 @@ impl<const W: usize, const H: usize> Tree<W, H> {
         }
         // Entries are `child | count << 32` (count 0: an inner node) and the
         // parameter where the ray enters it. An `ArrayVec` is not zeroed: a
-        // zeroed array of this size cost 8 % of a small scene's instructions.
+        // zeroed array of this size costs 8 % of a small scene's
+        // instructions (`docs/benchmarks.md`).
         let mut stack: ArrayVec<(u64, f64), STACK> = ArrayVec::new();
         // The next entry to take, kept out of the stack: a step that enters
         // children goes on with one of them without pushing and popping it.
@@ -119,9 +120,10 @@ impl<const W: usize, const H: usize> Tree<W, H> {
             let t_max4 = f64x4::new(*t_max);
             // Only `(key, child)` pairs are sorted; the children's entries
             // stay where they were computed. (Sorting whole stack entries
-            // moved their four-lane entries through unaligned stack slots:
-            // each move a failed store-to-load forward, 17 % of the packet
-            // walk's time on the 100,000-block grid, invisible to callgrind.)
+            // would move their four-lane entries through unaligned stack
+            // slots: each move a failed store-to-load forward, 17 % of the
+            // packet walk's time on the 100,000-block grid, which callgrind
+            // does not show; see `docs/benchmarks.md`.)
             let mut entries = [f64x4::ZERO; W];
             let mut masks = [0u32; W];
             let mut order = [(0.0f64, 0usize); W];
