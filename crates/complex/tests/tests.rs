@@ -3,10 +3,10 @@
 mod alloc;
 mod bounds;
 mod common;
+mod furniture;
 mod fuzz_regressions;
 mod kernel;
 mod oracle;
 mod secondary;
 mod seed;
 mod stress;
-mod table;
