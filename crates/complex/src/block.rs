@@ -4,7 +4,7 @@ use quadric::{Bound, HalfSpace, Interval, IntervalSet, Pieces, Precision, Quadri
 
 use crate::ComplexError;
 
-/// How light passes a block. The kernel only uses it for ownership (SPEC §3).
+/// How light passes a block. The kernel only uses it for ownership (docs/model.md §3.4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Opacity {
     /// Owns every point it contains.
@@ -155,7 +155,7 @@ impl Block {
 
     /// The set of `λ >= 0` inside the block: the intersection of its solids'
     /// sets, each end tagged with the index of the solid it lies on. Stops as
-    /// soon as the running set is empty (seed 001's loop).
+    /// soon as the running set is empty (the convex loop of docs/model.md §3.1).
     pub fn intervals(&self, ray: &Ray) -> IntervalSet {
         self.spans(ray).set()
     }
@@ -330,7 +330,7 @@ fn rebuilt(intervals: &[Interval], fallback: IntervalSet) -> IntervalSet {
 pub(crate) const NEAR_TIE: f64 = 4e-6;
 
 /// [`Precision::Certified`] ties between the ends of *different blocks*
-/// in the partition (SPEC §3), settled as [`Block::certified_set`] settles
+/// in the partition (docs/model.md §3.5), settled as [`Block::certified_set`] settles
 /// those between solids: each end of a later block's set (in `sets`,
 /// sorted by block id = priority) that lies within the two certified
 /// bounds of an end of an earlier block is ordered against it by

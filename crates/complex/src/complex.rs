@@ -110,7 +110,7 @@ pub struct Complex {
 impl Complex {
     /// Builds the query structure: a tight box per block and a BVH over the
     /// bounded ones. Blocks keep their order: earlier blocks have priority
-    /// (SPEC §3).
+    /// (docs/model.md §3.4).
     pub fn new(blocks: Vec<Block>, options: ComplexOptions) -> Result<Self, ComplexError> {
         if blocks.len() >= u32::MAX as usize {
             return Err(ComplexError::TooManyBlocks { max: u32::MAX as usize - 1 });

@@ -1,4 +1,4 @@
-//! The partition of a ray into segments owned by blocks (SPEC §3): its
+//! The partition of a ray into segments owned by blocks (docs/model.md §3.5, §3.6): its
 //! types, and the priority rule that forms it from the blocks' intervals
 //! along the ray ([`Complex::partition`], its segments alone, and its first
 //! interface).

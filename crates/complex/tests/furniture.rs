@@ -1,4 +1,4 @@
-//! Seed 001's table: a top and four legs, the union of five blocks.
+//! The table of docs/model.md §3.8: a top and four legs, the union of five blocks.
 
 use complex::Complex;
 use quadric::nalgebra::Point3;

@@ -91,7 +91,7 @@ fn build(specs: &[Spec]) -> Complex {
     Complex::new(blocks, ComplexOptions::default()).expect("valid complex")
 }
 
-/// The owner by SPEC §3, from membership flags in priority order.
+/// The owner by docs/model.md §3.4, from membership flags in priority order.
 fn oracle_owner(inside: &[bool], transparent: &[bool]) -> Option<BlockId> {
     let pick = |want_transparent: bool| {
         (0..inside.len()).find(|&i| inside[i] && transparent[i] == want_transparent).map(|i| BlockId(i as u32))

@@ -85,7 +85,7 @@ impl Stress {
         self.exact.iter().flat_map(|(solids, _, _)| solids).any(crossings)
     }
 
-    /// The exact medium at a double point (priority rule of SPEC §3).
+    /// The exact medium at a double point (priority rule of docs/model.md §3.4).
     fn medium(&self, x: &Point3<f64>) -> Medium {
         let x = [x.x, x.y, x.z];
         let mut glass = None;

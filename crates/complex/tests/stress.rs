@@ -1,5 +1,5 @@
 //! Numerical stress suite at the complex level, judged by the `reference`
-//! crate's exact partition (exact roots, exact ties, SPEC §3 priority and
+//! crate's exact partition (exact roots, exact ties, the priority rule of docs/model.md §3.4 and
 //! the ε rule): a surface shared by two blocks as `+Q` and `-Q` (no cracks,
 //! no double hits in the union), slabs of two half-spaces 10⁻⁹ apart,
 //! nested transparent blocks, rays starting inside blocks, a block of size

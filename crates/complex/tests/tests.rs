@@ -8,5 +8,5 @@ mod fuzz_regressions;
 mod kernel;
 mod oracle;
 mod secondary;
-mod seed;
 mod stress;
+mod transparency;

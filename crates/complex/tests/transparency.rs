@@ -1,7 +1,7 @@
-//! Seed 001's transparency cases: two overlapping blocks A and B, A
-//! transparent, B opaque or transparent, inserted in either order, with the
-//! same or a different material; and a three-block case its pseudo-code
-//! gets wrong.
+//! The transparency cases of docs/model.md §3.8: two overlapping blocks A
+//! and B, A transparent, B opaque or transparent, inserted in either order,
+//! with the same or a different material; and the three-block case a single
+//! running-bounds pass gets wrong.
 //!
 //! Along the x axis A covers `[0, 4]` and B covers `[2, 6]` (unit squares
 //! across). A ray traced on inside A (it starts at `x = 0.5`, going `+x`)
@@ -63,9 +63,10 @@ fn the_invisible_interface_is_still_in_the_partition() {
     assert_eq!(p.events.iter().filter(|e| c.is_visible(e)).count(), 2);
 }
 
-/// Seed 001's pseudo-code, literally: the blocks' single intervals in
-/// insertion order, returning `[λmin, λmax]`.
-fn seed_pseudo_code(blocks: &[(f64, f64, bool)]) -> (f64, f64) {
+/// The single-pass shortcut of docs/model.md §3.8 ("Why the partition must
+/// be exact"), literally: the blocks' single intervals in insertion order,
+/// returning `[λmin, λmax]`.
+fn single_pass_shortcut(blocks: &[(f64, f64, bool)]) -> (f64, f64) {
     let (mut lmin, mut lmax) = (f64::INFINITY, f64::INFINITY);
     for &(l1, l2, transparent) in blocks {
         if transparent {
@@ -87,17 +88,17 @@ fn seed_pseudo_code(blocks: &[(f64, f64, bool)]) -> (f64, f64) {
 fn three_blocks_of_one_medium_joined_by_a_later_block() {
     // A = [0, 2] and C = [4, 6] are joined by B = [1, 5], inserted last; all
     // transparent with one material, so the ray crosses one medium from x = 0
-    // to x = 6. The seed's loop sees C before the connecting piece B and so
-    // ignores it (its own caveat).
+    // to x = 6. The single pass sees C before the connecting piece B and so
+    // ignores it.
     let a = block("A", cuboid([0.0, -1.0, -1.0], [2.0, 1.0, 1.0]), T, 7);
     let cc = block("C", cuboid([4.0, -1.0, -1.0], [6.0, 1.0, 1.0]), T, 7);
     let b = block("B", cuboid([1.0, -1.0, -1.0], [5.0, 1.0, 1.0]), T, 7);
     let c = complex(vec![a, cc, b]);
     let from_outside = ray([-1.0, 0.0, 0.0], [1.0, 0.0, 0.0]);
     // The ray's intervals in insertion order: A [1, 3], C [5, 7], B [2, 6].
-    let seed = seed_pseudo_code(&[(1.0, 3.0, true), (5.0, 7.0, true), (2.0, 6.0, true)]);
-    assert_eq!(seed.0, 1.0);
-    assert_ne!(seed.1, 7.0, "the seed's pseudo-code should miss the rear block");
+    let shortcut = single_pass_shortcut(&[(1.0, 3.0, true), (5.0, 7.0, true), (2.0, 6.0, true)]);
+    assert_eq!(shortcut.0, 1.0);
+    assert_ne!(shortcut.1, 7.0, "the single pass should miss the rear block");
     let first = c.cast_ray(&from_outside, f64::INFINITY).expect("entry");
     assert_eq!((first.t, name(&c, first.block), first.entering), (1.0, "A", true));
     let inside = ray([0.5, 0.0, 0.0], [1.0, 0.0, 0.0]);
