@@ -562,7 +562,7 @@ impl Complex {
         let mut consider = |spans: &[Interval], t_max: &mut f64| {
             for iv in spans {
                 for e in [iv.enter.t, iv.exit.t] {
-                    if e > tau && e <= *t_max && e.is_finite() && best.map_or(true, |b| e < b) {
+                    if e > tau && e <= *t_max && e.is_finite() && best.is_none_or(|b| e < b) {
                         best = Some(e);
                         *t_max = e;
                     }
@@ -701,7 +701,7 @@ impl Complex {
                             next = iv.exit.t;
                             owner = None;
                         }
-                        if owner.map_or(true, |(o, _)| i < o) {
+                        if owner.is_none_or(|(o, _)| i < o) {
                             owner = Some((i, iv.exit.solid));
                         }
                     }
@@ -798,7 +798,7 @@ impl Nearest {
         }
         if let Some(iv) = entry {
             let t = iv.enter.t;
-            if t <= *t_max && self.best.map_or(true, |(bt, bi, _, _)| t < bt || (t == bt && i < bi)) {
+            if t <= *t_max && self.best.is_none_or(|(bt, bi, _, _)| t < bt || (t == bt && i < bi)) {
                 self.best = Some((t, i, iv.enter.solid, k));
                 *t_max = t;
             }

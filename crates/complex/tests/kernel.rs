@@ -68,7 +68,7 @@ fn brute_first_entry(c: &Complex, ray: &Ray) -> Option<(f64, u32)> {
     let mut best: Option<(f64, u32)> = None;
     for (i, b) in c.blocks().iter().enumerate() {
         if let Some(iv) = b.intervals(ray).iter().find(|iv| iv.enter.t > c.epsilon()) {
-            if best.map_or(true, |(t, _)| iv.enter.t < t) {
+            if best.is_none_or(|(t, _)| iv.enter.t < t) {
                 best = Some((iv.enter.t, i as u32));
             }
         }

@@ -83,7 +83,7 @@ fn strip(text: &str) -> String {
             // r"…" or r#"…"#: up to the quote followed by as many hashes.
             let hashes = raw_string_at(&b, i).unwrap_or(0);
             i += 2 + hashes;
-            let close: String = std::iter::once('"').chain(std::iter::repeat('#').take(hashes)).collect();
+            let close: String = std::iter::once('"').chain(std::iter::repeat_n('#', hashes)).collect();
             let close: Vec<char> = close.chars().collect();
             while i < b.len() && b[i..].iter().take(close.len()).ne(close.iter()) {
                 i += 1;

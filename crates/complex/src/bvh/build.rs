@@ -227,7 +227,7 @@ pub(super) fn sah_split(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> O
             lc += count[b];
             let (right_area, rcount) = right[k + 1];
             let cost = 0.125 + (f64::from(lc) * half_area(&lmin, &lmax) + f64::from(rcount) * right_area) / parent;
-            if best.map_or(true, |(c, _, _)| cost < c) {
+            if best.is_none_or(|(c, _, _)| cost < c) {
                 best = Some((cost, axis, b + 1));
             }
         }

@@ -168,7 +168,7 @@ fn slab_test_with_axis_parallel_rays() {
             let wide = lane0::<8, 2>(&rb, &min, &max, lane, 0.0, f64::INFINITY);
             assert_eq!(wide, got, "{origin:?} along {dir:?}: eight-wide, lane {lane}");
         }
-        assert!(got.map_or(true, |t| !t.is_nan()), "{origin:?} along {dir:?}: NaN entry");
+        assert!(got.is_none_or(|t| !t.is_nan()), "{origin:?} along {dir:?}: NaN entry");
     };
     for axis in 0..3 {
         for sign in [1.0, -1.0] {
@@ -343,7 +343,7 @@ fn sah_split_every_bin(work: &mut [Entry], min: &[f64; 3], max: &[f64; 3]) -> Op
                 continue;
             }
             let cost = 0.125 + (lc as f64 * half_area(&lmin, &lmax) + rcount as f64 * right_area[b + 1]) / parent;
-            if best.map_or(true, |(c, _, _)| cost < c) {
+            if best.is_none_or(|(c, _, _)| cost < c) {
                 best = Some((cost, axis, b + 1));
             }
         }
