@@ -54,6 +54,23 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    /// `check(n, r, want)`: `facing(n, r)` is `want`, bit for bit.
+    fn check(n: [f64; 3], r: [f64; 3], want: [f64; 3]) {
+        let got = facing(Vector3::from(n), &Vector3::from(r));
+        assert_eq!(got.map(f64::to_bits), Vector3::from(want).map(f64::to_bits), "facing({n:?}, {r:?})");
+    }
+
+    #[test]
+    fn facing_turns_the_normal_against_the_ray() {
+        let up = [0.0, 1.0, 0.0];
+        check(up, [0.0, -1.0, 0.0], up); // already against the ray
+        check(up, [0.0, 1.0, 0.0], [-0.0, -1.0, -0.0]); // along it: turned
+        check(up, [0.6, 0.8, 0.0], [-0.0, -1.0, -0.0]);
+        check(up, [0.0, 1e-300, 1.0], [-0.0, -1.0, -0.0]); // barely along it
+        check(up, [1.0, 0.0, 0.0], up); // grazing (n·r = 0): kept
+        check(up, [1.0, -0.0, 0.0], up);
+    }
+
     proptest! {
         /// The axis shortcut is what the divisions give, bit for bit.
         #[test]
