@@ -192,7 +192,7 @@ fn tiny_next_to_huge() {
 /// few ulps apart came first.
 #[test]
 fn certified_block_ties_are_exact() {
-    use reference::csg::{block_set, End};
+    use reference::csg::{block_set, ExactEnd};
     let ball = |cx: f64| {
         Solid::from(
             Quadric::from_coefficients([1.0, 1.0, 1.0, 0.0, 0.0, 0.0, -cx, 0.0, 0.0, cx * cx - 25.0]).expect("finite"),
@@ -216,7 +216,7 @@ fn certified_block_ties_are_exact() {
             let exact = block_set(&solids, &ray);
             // The case is what it says: one interval whose ends are ties.
             assert_eq!(exact.len(), 1, "{ray:?}");
-            assert!(matches!((&exact[0].0, &exact[0].1), (End::Crossing { .. }, End::Crossing { .. })));
+            assert!(matches!((&exact[0].0, &exact[0].1), (ExactEnd::Crossing { .. }, ExactEnd::Crossing { .. })));
             rays += 1;
             let tags = |set: &quadric::IntervalSet| -> Vec<(Option<u32>, Option<u32>)> {
                 set.iter().map(|iv| (iv.enter.solid(), iv.exit.solid())).collect()

@@ -95,7 +95,7 @@ fn sign3(c: &Big, p: &Big, d1: &Big, q: &Big, d2: &Big) -> i32 {
 
 /// One end of an exact interval along the ray `λ >= 0`.
 #[derive(Clone, Debug)]
-pub enum End {
+pub enum ExactEnd {
     /// The ray's origin `λ = 0`, where the ray starts inside (no surface).
     Start,
     /// `λ = ∞`.
@@ -109,29 +109,29 @@ pub enum End {
     },
 }
 
-impl End {
+impl ExactEnd {
     /// The value as a double (`0`, `∞`, or the rounded root).
     pub fn to_f64(&self) -> f64 {
         match self {
-            End::Start => 0.0,
-            End::Infinity => f64::INFINITY,
-            End::Crossing { root, .. } => root.to_f64(),
+            ExactEnd::Start => 0.0,
+            ExactEnd::Infinity => f64::INFINITY,
+            ExactEnd::Crossing { root, .. } => root.to_f64(),
         }
     }
 
     /// The exact order of two ends.
-    pub fn cmp_exact(&self, o: &End) -> Ordering {
+    pub fn cmp_exact(&self, o: &ExactEnd) -> Ordering {
         match (self, o) {
-            (End::Infinity, End::Infinity) => Ordering::Equal,
-            (End::Infinity, _) => Ordering::Greater,
-            (_, End::Infinity) => Ordering::Less,
+            (ExactEnd::Infinity, ExactEnd::Infinity) => Ordering::Equal,
+            (ExactEnd::Infinity, _) => Ordering::Greater,
+            (_, ExactEnd::Infinity) => Ordering::Less,
             (a, b) => a.root().cmp_exact(&b.root()),
         }
     }
 
     fn root(&self) -> Root {
         match self {
-            End::Crossing { root, .. } => root.clone(),
+            ExactEnd::Crossing { root, .. } => root.clone(),
             _ => Root::of_f64(0.0),
         }
     }
@@ -139,20 +139,20 @@ impl End {
     /// The solid whose surface this end lies on.
     pub fn solid(&self) -> Option<u32> {
         match self {
-            End::Crossing { solid, .. } => Some(*solid),
+            ExactEnd::Crossing { solid, .. } => Some(*solid),
             _ => None,
         }
     }
 }
 
 /// A regularised set of closed intervals within `λ >= 0`, sorted, exact.
-pub type ExactSet = Vec<(End, End)>;
+pub type ExactSet = Vec<(ExactEnd, ExactEnd)>;
 
 /// The exact set of one solid along the ray, its ends tagged `index`.
 pub fn solid_set(solid: &Solid, index: u32, ray: &Ray) -> ExactSet {
     let exact = ExactQuadric::solid(solid).solve(ray);
     let (s, t, u) = (&exact.s, &exact.t, &exact.u);
-    let crossing = |root: Root| End::Crossing { root, solid: index };
+    let crossing = |root: Root| ExactEnd::Crossing { root, solid: index };
     let zero = Big::zero();
     // The line's set as (lo, hi) with None for -∞ / +∞.
     let line: Vec<(Option<Root>, Option<Root>)> = if s.signum() == 0 {
@@ -204,9 +204,9 @@ pub fn solid_set(solid: &Solid, index: u32, ray: &Ray) -> ExactSet {
         .map(|(lo, hi)| {
             let lo = match lo {
                 Some(l) if l.cmp_exact(&origin) != Ordering::Less => crossing(l),
-                _ => End::Start,
+                _ => ExactEnd::Start,
             };
-            (lo, hi.map_or(End::Infinity, crossing))
+            (lo, hi.map_or(ExactEnd::Infinity, crossing))
         })
         .collect()
 }
@@ -235,7 +235,7 @@ pub fn intersect(a: &ExactSet, b: &ExactSet) -> ExactSet {
 /// The exact set of a block (the intersection of its solids' sets; ends
 /// tagged with the solid's index in the block).
 pub fn block_set(solids: &[Solid], ray: &Ray) -> ExactSet {
-    let mut acc = vec![(End::Start, End::Infinity)];
+    let mut acc = vec![(ExactEnd::Start, ExactEnd::Infinity)];
     for (i, s) in solids.iter().enumerate() {
         acc = intersect(&acc, &solid_set(s, i as u32, ray));
         if acc.is_empty() {
@@ -258,9 +258,9 @@ pub struct ExactBlock {
 #[derive(Clone, Debug)]
 pub struct ExactSegment {
     /// Where it starts (exact).
-    pub start: End,
+    pub start: ExactEnd,
     /// Where it ends (exact).
-    pub end: End,
+    pub end: ExactEnd,
     /// The owning block's index, or `None` (outside every block).
     pub owner: Option<usize>,
 }
@@ -285,20 +285,20 @@ impl ExactPartition {
             .map(|b| {
                 let mut set = block_set(&b.solids, ray);
                 set.retain(|(_, hi)| match hi {
-                    End::Infinity => true,
+                    ExactEnd::Infinity => true,
                     end => end.root().cmp_exact(&eps) == Ordering::Greater,
                 });
                 set
             })
             .collect();
-        let mut cuts: Vec<End> = vec![End::Start];
+        let mut cuts: Vec<ExactEnd> = vec![ExactEnd::Start];
         for set in &sets {
             for (lo, hi) in set {
                 cuts.push(lo.clone());
                 cuts.push(hi.clone());
             }
         }
-        cuts.push(End::Infinity);
+        cuts.push(ExactEnd::Infinity);
         cuts.sort_by(|a, b| a.cmp_exact(b));
         cuts.dedup_by(|a, b| a.cmp_exact(b) == Ordering::Equal);
         let mut segments: Vec<ExactSegment> = Vec::new();
@@ -320,7 +320,7 @@ impl ExactPartition {
     /// The exact owner at the double `λ`: of the segment containing it, the
     /// later one at an exact cut.
     pub fn owner_at(&self, lambda: f64) -> Option<usize> {
-        let x = End::Crossing { root: Root::of_f64(lambda), solid: 0 };
+        let x = ExactEnd::Crossing { root: Root::of_f64(lambda), solid: 0 };
         self.segments.iter().rev().find(|s| s.start.cmp_exact(&x) != Ordering::Greater).and_then(|s| s.owner)
     }
 

@@ -19,9 +19,7 @@
 #![deny(missing_docs)]
 
 pub mod csg;
-pub use csg::{
-    block_set, intersect, solid_set, End as ExactEnd, ExactBlock, ExactPartition, ExactSegment, ExactSet, Root,
-};
+pub use csg::{block_set, intersect, solid_set, ExactBlock, ExactEnd, ExactPartition, ExactSegment, ExactSet, Root};
 
 use num_bigint::{BigInt, Sign};
 use quadric::{HalfSpace, IntervalSet, Quadric, Ray, Solid, NO_SOLID};
