@@ -60,6 +60,43 @@ impl Aabb {
         Aabb { min: self.min.sup(&other.min), max: self.max.inf(&other.max) }
     }
 
+    /// The edge lengths `max - min`: zero on every axis of an empty box,
+    /// `∞` on an unbounded axis, never NaN.
+    ///
+    /// ```
+    /// use complex::Aabb;
+    /// use quadric::nalgebra::{Point3, Vector3};
+    /// let b = Aabb { min: Point3::new(-1.0, 0.0, 2.0), max: Point3::new(1.0, 0.5, 2.0) };
+    /// assert_eq!(b.size(), Vector3::new(2.0, 0.5, 0.0));
+    /// assert_eq!(Aabb::EMPTY.size(), Vector3::zeros());
+    /// assert_eq!(Aabb::INFINITE.size().x, f64::INFINITY);
+    /// ```
+    pub fn size(&self) -> Vector3<f64> {
+        if self.is_empty() {
+            return Vector3::zeros();
+        }
+        self.max - self.min
+    }
+
+    /// The centre, for a bounded box; `None` for an empty or unbounded one
+    /// (whose centre would be NaN).
+    ///
+    /// ```
+    /// use complex::Aabb;
+    /// use quadric::nalgebra::Point3;
+    /// let b = Aabb { min: Point3::new(-1.0, 0.0, 2.0), max: Point3::new(1.0, 0.5, 4.0) };
+    /// assert_eq!(b.center(), Some(Point3::new(0.0, 0.25, 3.0)));
+    /// assert_eq!(Aabb::EMPTY.center(), None);
+    /// assert_eq!(Aabb::INFINITE.center(), None);
+    /// let huge = Aabb { min: Point3::new(-1e308, 0.0, 0.0), max: Point3::new(1.5e308, 0.0, 0.0) };
+    /// assert_eq!(huge.center(), Some(Point3::new(0.25e308, 0.0, 0.0)));
+    /// ```
+    pub fn center(&self) -> Option<Point3<f64>> {
+        // Halves first: `min + max` and `max - min` overflow for boxes
+        // spanning more than the largest double, their halves never do.
+        self.is_bounded().then(|| Point3::from(self.min.coords * 0.5 + self.max.coords * 0.5))
+    }
+
     /// Whether `p` lies in the closed box.
     pub fn contains_point(&self, p: &Point3<f64>) -> bool {
         (0..3).all(|i| self.min[i] <= p[i] && p[i] <= self.max[i])

@@ -23,6 +23,10 @@ pub struct ComplexOptions {
     /// [`DEFAULT_RELATIVE_EPSILON`] times the diagonal of the bounded part of
     /// the scene (or `1e-9` if nothing is bounded).
     pub epsilon: Option<f64>,
+    /// The precision mode of every query (default
+    /// [`quadric::Precision::Accurate`]); [`Complex::set_precision`] changes
+    /// it later.
+    pub precision: quadric::Precision,
 }
 
 /// What [`Complex::occluded_with`] remembers between rays: the block that
@@ -148,7 +152,11 @@ impl Complex {
             slot_of[kernel.block(k) as usize] = k;
         }
         let any_transparent = blocks.iter().any(Block::is_transparent);
-        Ok(Complex { blocks, boxes, bvh, kernel, slot_of, unbounded, epsilon, any_transparent })
+        let mut complex = Complex { blocks, boxes, bvh, kernel, slot_of, unbounded, epsilon, any_transparent };
+        if options.precision != quadric::Precision::default() {
+            complex.set_precision(options.precision);
+        }
+        Ok(complex)
     }
 
     /// The precision mode of the kernel every query uses (default
@@ -157,7 +165,7 @@ impl Complex {
         self.kernel.precision
     }
 
-    /// BlockSpans the precision mode of every query (`cast_ray`, `occluded`,
+    /// Sets the precision mode of every query (`cast_ray`, `occluded`,
     /// `partition`, `intervals`, `block_intervals`; `contains_point`
     /// evaluates `f` at the point, the same in every mode).
     pub fn set_precision(&mut self, precision: quadric::Precision) {

@@ -21,7 +21,7 @@
 //! let far = Transform::translate(Vector3::new(1e9, 0.0, 0.0)).unwrap();
 //! let ball = Block::new("ball", vec![Solid::from(Quadric::sphere().transformed(&far))], Opacity::Opaque, MaterialKey(0))
 //!     .unwrap();
-//! let scene = Complex::new(vec![ball], ComplexOptions { epsilon: Some(0.0) }).unwrap();
+//! let scene = Complex::new(vec![ball], ComplexOptions { epsilon: Some(0.0), ..Default::default() }).unwrap();
 //! let ray = Ray::new(Point3::new(1e9 - 0.3, 0.2, -5.0), Vector3::z()).unwrap();
 //! let hit = scene.cast_ray(&ray, f64::INFINITY).unwrap();
 //! // The mirror direction leaves the ball: with ε = 0 nothing is hit again.

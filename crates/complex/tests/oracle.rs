@@ -323,7 +323,8 @@ fn first_interface_with_one_block_is_the_first_end_after_epsilon() {
             (0.0, 3.5, None),
             (0.0, -1.0, Some((2.0, true))),
         ] {
-            let c = Complex::new(vec![block(transparent)], ComplexOptions { epsilon: Some(eps) }).expect("valid");
+            let c = Complex::new(vec![block(transparent)], ComplexOptions { epsilon: Some(eps), ..Default::default() })
+                .expect("valid");
             let ray = Ray::new(Point3::new(origin, 0.0, 0.0), Vector3::x()).expect("ray");
             let fi = c.first_interface(&ray, &mut complex::Partition::default());
             assert_eq!(fi.map(|e| (e.t, e.entering)), want, "ε = {eps}, from x = {origin}");

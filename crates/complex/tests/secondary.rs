@@ -61,7 +61,7 @@ impl Stress {
         let blocks: Vec<_> = blocks.into_iter().map(|(s, o, k)| (moved(&s, &m), o, k)).collect();
         let exact = blocks.iter().map(|(s, o, k)| (s.iter().map(ExactQuadric::solid).collect(), *o, *k)).collect();
         let built = blocks.into_iter().map(|(s, o, k)| Block::new("b", s, o, MaterialKey(k)).expect("valid")).collect();
-        let complex = Complex::new(built, ComplexOptions { epsilon: Some(0.0) }).expect("valid");
+        let complex = Complex::new(built, ComplexOptions { epsilon: Some(0.0), ..Default::default() }).expect("valid");
         let (h, probe) = (1e-12 * at.max(1.0), 1e-14 * at.max(1.0));
         let camera = Vector3::new(0.3, 0.5, 6.0);
         Stress { name: format!("{name} at {at:e}"), complex, exact, centre, size, camera, h, probe }

@@ -30,7 +30,7 @@ fn complex_of(blocks: &[(Vec<Solid>, Opacity)], precision: Precision, epsilon: O
         .enumerate()
         .map(|(i, (s, o))| Block::new(format!("b{i}"), s.clone(), *o, MaterialKey(i as u32)).expect("valid block"))
         .collect();
-    let mut c = Complex::new(blocks, ComplexOptions { epsilon }).expect("valid complex");
+    let mut c = Complex::new(blocks, ComplexOptions { epsilon, ..Default::default() }).expect("valid complex");
     c.set_precision(precision);
     assert_eq!(c.precision(), precision);
     c

@@ -6,6 +6,7 @@ mod common;
 mod furniture;
 mod fuzz_regressions;
 mod kernel;
+mod options;
 mod oracle;
 mod secondary;
 mod stress;

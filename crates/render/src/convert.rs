@@ -197,7 +197,7 @@ impl WorldParts {
     // Builds the complex: the last step of `SceneFile::to_world`.
     fn build(self) -> Result<World, SceneError> {
         let WorldParts { camera, settings, lights, materials, blocks, infos } = self;
-        let complex = Complex::new(blocks, ComplexOptions { epsilon: settings.epsilon })
+        let complex = Complex::new(blocks, ComplexOptions { epsilon: settings.epsilon, ..Default::default() })
             .map_err(|e| SceneError::semantic("blocks", e.to_string()))?;
         Ok(World::new(camera, settings, lights, materials, complex, infos))
     }

@@ -330,8 +330,8 @@ impl Stress {
         let blocks: Vec<_> = blocks.into_iter().map(|(s, o, k)| (moved(&s, &m), o, k)).collect();
         let exact = blocks.iter().map(|(s, o, k)| (s.iter().map(ExactQuadric::solid).collect(), *o, *k)).collect();
         let built = blocks.into_iter().map(|(s, o, k)| Block::new("b", s, o, MaterialKey(k)).expect("a valid block"));
-        let complex =
-            Complex::new(built.collect(), ComplexOptions { epsilon: Some(epsilon) }).expect("a valid complex");
+        let complex = Complex::new(built.collect(), ComplexOptions { epsilon: Some(epsilon), ..Default::default() })
+            .expect("a valid complex");
         let (h, probe) = (1e-12 * at.max(1.0), 1e-14 * at.max(1.0));
         Stress { complex, exact, centre, size, camera: Vector3::new(0.3, 0.5, 6.0), h, probe }
     }
