@@ -36,4 +36,12 @@ pub enum ComplexError {
         /// The limit.
         max: usize,
     },
+    /// A batch query given an output slice of another length than its input.
+    #[error("a batch of {queries} queries needs {queries} answer slots, got {answers}")]
+    LengthMismatch {
+        /// How many points or rays were given.
+        queries: usize,
+        /// How long the output slice is.
+        answers: usize,
+    },
 }

@@ -4,11 +4,14 @@
 //! solids from the [`quadric`] crate. This crate answers, for any ray, the
 //! first hit with its surface ([`Complex::cast_ray`]), the partition of the
 //! ray into segments owned by blocks under the priority rule
-//! ([`Complex::partition`]) and point membership ([`Complex::contains_point`]).
+//! ([`Complex::partition`]) and point membership ([`Complex::contains_point`]),
+//! one at a time or in parallel batches ([`Complex::classify`],
+//! [`Complex::cast_many`], [`Complex::trace_many`]).
 //! Each block gets a tight, conservative box; a BVH over the bounded blocks
 //! keeps queries fast for large scenes. See `docs/complex.md`.
 #![deny(missing_docs)]
 
+mod batch;
 mod block;
 mod bounds;
 mod bvh;
@@ -18,6 +21,7 @@ mod kernel;
 mod partition;
 mod spawn;
 
+pub use batch::Traces;
 pub use block::{Block, BlockId, MaterialKey, Opacity};
 pub use bounds::Aabb;
 pub use complex::{Complex, ComplexOptions, Hit, Occluder, DEFAULT_RELATIVE_EPSILON};

@@ -1,4 +1,5 @@
-//! `cast_ray`, `cast_rays` and `occluded` never allocate, with or without transparent blocks.
+//! `cast_ray`, `cast_rays` and `occluded` never allocate, with or without
+//! transparent blocks; nor do the batch queries into buffers already grown.
 
 use complex::{Block, Complex, ComplexOptions, MaterialKey, Opacity};
 use proptest::prelude::*;
@@ -74,5 +75,38 @@ fn occluded_does_not_allocate() {
         let info = allocation_counter::measure(|| n = rays.iter().filter(|r| c.occluded(r, 8.0)).count());
         assert!(n > 50, "the scene should block often, got {n}");
         assert_eq!(info.count_total, 0, "occluded allocated (transparent every {transparent_every})");
+    }
+}
+
+/// The counts of allocations (on the measuring thread) of `classify`,
+/// `cast_many` and `trace_many` (the latter into a `Traces` already grown
+/// by the same batch) of the first `n` of 20 copies of the scene's rays.
+fn batch_allocations(c: &Complex, rays: &[Ray], n: usize) -> [u64; 3] {
+    let rays: Vec<Ray> = rays.iter().cycle().take(n).copied().collect();
+    let points: Vec<_> = rays.iter().map(|r| r.at(4.0)).collect();
+    let mut owners = vec![None; n];
+    let mut hits = vec![None; n];
+    let mut traces = complex::Traces::new();
+    c.trace_many(&rays, &mut traces);
+    let classify = allocation_counter::measure(|| c.classify(&points, &mut owners).expect("lengths match"));
+    let cast = allocation_counter::measure(|| c.cast_many(&rays, f64::INFINITY, &mut hits).expect("lengths match"));
+    let trace = allocation_counter::measure(|| c.trace_many(&rays, &mut traces));
+    [classify.count_total, cast.count_total, trace.count_total]
+}
+
+#[test]
+fn batch_queries_do_not_allocate_per_query() {
+    for transparent_every in [0, 4] {
+        let (c, rays) = scene(transparent_every);
+        // One chunk each (100 rays): on the calling thread, nothing at all.
+        assert_eq!(batch_allocations(&c, &rays, 100), [0; 3], "transparent every {transparent_every}");
+        // Many chunks through rayon, measured on the one thread of a pool,
+        // which runs them all (the counter counts the measuring thread's
+        // allocations): rayon's jobs live on the stack, so again nothing.
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a pool");
+        for n in [3_000, 10_000] {
+            let counts = pool.install(|| batch_allocations(&c, &rays, n));
+            assert_eq!(counts, [0; 3], "{n} queries, transparent every {transparent_every}");
+        }
     }
 }

@@ -8,7 +8,7 @@ use quadric::nalgebra::{Point3, Vector3};
 use quadric::{strategies, IntervalSet, Quadric, Ray, Solid};
 
 /// One block: solids, transparent?, material.
-type Spec = (Vec<Solid>, bool, u32);
+pub(crate) type Spec = (Vec<Solid>, bool, u32);
 
 /// Solids flipped where needed so that each contains the origin.
 fn through_origin(solids: Vec<Solid>) -> Vec<Solid> {
@@ -36,7 +36,7 @@ fn spec() -> impl Strategy<Value = Spec> {
 
 /// 3 to 8 blocks, the first three all containing the origin (so at least
 /// three overlap there), in shuffled priority.
-fn complex_spec() -> impl Strategy<Value = Vec<Spec>> {
+pub(crate) fn complex_spec() -> impl Strategy<Value = Vec<Spec>> {
     (proptest::collection::vec(spec(), 3..=8), any::<proptest::sample::Index>()).prop_map(|(mut specs, rot)| {
         for s in specs.iter_mut().take(3) {
             s.0 = through_origin(core::mem::take(&mut s.0));
@@ -48,7 +48,7 @@ fn complex_spec() -> impl Strategy<Value = Vec<Spec>> {
 }
 
 /// Rays from anywhere in `[-4, 4]³`, half of them aimed near the origin.
-fn ray_spec() -> impl Strategy<Value = Ray> {
+pub(crate) fn ray_spec() -> impl Strategy<Value = Ray> {
     (strategies::ray(4.0), strategies::point(0.5), any::<bool>()).prop_map(|(r, target, aim)| {
         if aim {
             Ray::new(r.origin(), target - r.origin()).unwrap_or(r)
@@ -79,7 +79,7 @@ fn packets_agree(c: &Complex, rays: &[Ray], max_t: f64) -> Result<(), TestCaseEr
     Ok(())
 }
 
-fn build(specs: &[Spec]) -> Complex {
+pub(crate) fn build(specs: &[Spec]) -> Complex {
     let blocks = specs
         .iter()
         .enumerate()
@@ -365,7 +365,7 @@ fn occluder_remembers_the_block_that_stopped_the_last_ray() {
 
 /// A small bounded block (ball, capped tube or cube of size 0.1–0.5) placed
 /// at random in `[-3, 3]³`, opaque or transparent with one of two materials.
-fn small_block() -> impl Strategy<Value = Spec> {
+pub(crate) fn small_block() -> impl Strategy<Value = Spec> {
     use crate::common::{cuboid, hs, post};
     let shape = prop_oneof![
         Just(vec![Solid::from(Quadric::sphere())]),
