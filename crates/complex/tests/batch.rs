@@ -18,7 +18,8 @@ fn pool(threads: usize) -> rayon::ThreadPool {
 }
 
 /// `n` rays from the given ones, cycled, each copy's origin nudged a little
-/// so that the batch is not one ray repeated.
+/// so that the batch is not one ray repeated (and four in a row point
+/// different ways unless there is one ray: `cast_many` casts them one by one).
 fn batch_of(rays: &[Ray], n: usize) -> Vec<Ray> {
     if rays.is_empty() {
         return Vec::new();
@@ -28,6 +29,22 @@ fn batch_of(rays: &[Ray], n: usize) -> Vec<Ray> {
             let r = rays[i % rays.len()];
             let k = (i / rays.len()) as f64;
             Ray::new(r.origin() + 1e-3 * k * Vector3::new(1.0, -0.7, 0.3), r.direction()).unwrap_or(r)
+        })
+        .collect()
+}
+
+/// `n` rays in bundles of four near-parallel rays from one origin, as a
+/// camera's neighbouring pixels are: `cast_many` sends them through the
+/// packet walk.
+fn bundles_of(rays: &[Ray], n: usize) -> Vec<Ray> {
+    if rays.is_empty() {
+        return Vec::new();
+    }
+    (0..n)
+        .map(|i| {
+            let r = rays[(i / 4) % rays.len()];
+            let e = [Vector3::x(), Vector3::y(), Vector3::z(), Vector3::zeros()][i % 4];
+            Ray::new(r.origin(), r.direction() + 1e-3 * e).unwrap_or(r)
         })
         .collect()
 }
@@ -85,7 +102,7 @@ fn batches_agree(c: &Complex, rays: &[Ray], max_t: f64) -> Result<(), TestCaseEr
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases((ProptestConfig::default().cases / 8).max(8)))]
+    #![proptest_config(ProptestConfig::with_cases((ProptestConfig::default().cases / 16).max(8)))]
 
     /// On 3 to 8 overlapping blocks, opaque and transparent, in shuffled
     /// priority: every batch size, both pools, the single queries' answers.
@@ -98,6 +115,7 @@ proptest! {
         let c = build(&specs);
         for n in SIZES {
             batches_agree(&c, &batch_of(&rays, n), max_t)?;
+            batches_agree(&c, &bundles_of(&rays, n), max_t)?;
         }
     }
 }
@@ -116,6 +134,7 @@ proptest! {
         let specs: Vec<_> = specs.into_iter().map(|(s, t, m)| (s, t && !all_opaque, m)).collect();
         let c = build(&specs);
         batches_agree(&c, &batch_of(&rays, 1000), f64::INFINITY)?;
+        batches_agree(&c, &bundles_of(&rays, 1000), f64::INFINITY)?;
     }
 }
 
