@@ -235,8 +235,8 @@ impl Complex {
             out.chunks.resize_with(n_chunks, ChunkTraces::default);
         }
         let chunks = &mut out.chunks[..n_chunks];
-        let trace = |rays: &[Ray], chunk: &mut [ChunkTraces]| {
-            let ChunkTraces { scratch, segments, counts } = &mut chunk[0];
+        let trace = |rays: &[Ray], chunk: &mut ChunkTraces| {
+            let ChunkTraces { scratch, segments, counts } = chunk;
             segments.clear();
             counts.clear();
             for ray in rays {
@@ -245,11 +245,11 @@ impl Complex {
                 segments.extend_from_slice(&scratch.segments);
             }
         };
-        // One chunk buffer per chunk of rays: `for_each_chunk` with chunk 1 on the buffers.
+        // One buffer per chunk of rays, in parallel if there is more than one.
         if n_chunks <= 1 {
-            rays.chunks(TRACE_CHUNK).zip(chunks.chunks_mut(1)).for_each(|(r, c)| trace(r, c));
+            rays.chunks(TRACE_CHUNK).zip(chunks.iter_mut()).for_each(|(r, c)| trace(r, c));
         } else {
-            rays.par_chunks(TRACE_CHUNK).zip(chunks.par_chunks_mut(1)).for_each(|(r, c)| trace(r, c));
+            rays.par_chunks(TRACE_CHUNK).zip(chunks.par_iter_mut()).for_each(|(r, c)| trace(r, c));
         }
         out.offsets.clear();
         out.segments.clear();
