@@ -411,13 +411,16 @@ impl Base {
             Base::Coefficients(c) => {
                 let c = values(c);
                 let q = Quadric::from_coefficients(c);
-                assert_eq!(q.is_ok(), c.iter().all(|x| x.is_finite()), "from_coefficients({c:?})");
+                // All zero or only `k > 0` is degenerate.
+                let constant = c[..9].iter().all(|x| *x == 0.0) && c[9] >= 0.0;
+                assert_eq!(q.is_ok(), c.iter().all(|x| x.is_finite()) && !constant, "from_coefficients({c:?})");
                 q.map(Solid::from)
             }
             Base::Matrix(m) => {
                 let m = Matrix4::from_row_slice(&values(m));
                 let q = Quadric::from_matrix(&m);
-                let ok = m.iter().all(|x| x.is_finite()) && m == m.transpose();
+                let constant = m.iter().take(15).all(|x| *x == 0.0) && m[(3, 3)] >= 0.0;
+                let ok = m.iter().all(|x| x.is_finite()) && m == m.transpose() && !constant;
                 assert_eq!(q.is_ok(), ok, "from_matrix({m:?})");
                 q.map(Solid::from)
             }

@@ -32,4 +32,22 @@ pub enum GeometryError {
     /// A general matrix whose last row is not `[0, 0, 0, 1]`.
     #[error("the matrix is not affine: its last row must be [0, 0, 0, 1]")]
     NotAffine,
+    /// A quadric with no quadratic or linear part whose constant makes it
+    /// all of space by accident or empty: all ten coefficients zero
+    /// (`0 <= 0`), or only a positive constant (`k <= 0` nowhere).
+    #[error("the quadric is degenerate: {reason}")]
+    Degenerate {
+        /// Which case it is.
+        reason: &'static str,
+    },
+    /// A transform under which a part of the solid that is non-zero in exact
+    /// arithmetic would be stored below the normal range (zero or
+    /// subnormal), so that the placed solid is not the one described (a unit
+    /// ball scaled by `1e170` would become all of space); see
+    /// [`Quadric::try_transformed`](crate::Quadric::try_transformed).
+    #[error("the placed solid's {part} underflows: it would be stored below the smallest normal number (2.2e-308), so the solid would not be the one described")]
+    Underflow {
+        /// Which part underflowed.
+        part: &'static str,
+    },
 }

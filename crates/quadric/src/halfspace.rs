@@ -54,6 +54,23 @@ impl HalfSpace {
         HalfSpace { normal, d: self.d, origin: m.apply_point(&Point3::from(self.origin)).coords }
     }
 
+    /// [`transformed`](Self::transformed), checked:
+    /// [`GeometryError::NonFinite`] if a coefficient overflows,
+    /// [`GeometryError::Underflow`] if the whole normal `L⁻ᵀ n` underflows
+    /// (below `f64::MIN_POSITIVE`: the plane's direction is lost, and a zero
+    /// normal would make it all of space or nothing). A normal with only
+    /// some components underflowed tilts the plane by less than an ulp.
+    pub fn try_transformed(&self, m: &Transform) -> Result<Self, GeometryError> {
+        let placed = self.transformed(m);
+        if !placed.is_finite() {
+            return Err(GeometryError::NonFinite { what: "a coefficient of the placed solid" });
+        }
+        if self.normal.amax() >= f64::MIN_POSITIVE && placed.normal.amax() < f64::MIN_POSITIVE {
+            return Err(GeometryError::Underflow { part: "half-space normal" });
+        }
+        Ok(placed)
+    }
+
     /// `(a, b, c)`, not normalised.
     pub fn normal_vector(&self) -> &Vector3<f64> {
         &self.normal

@@ -128,16 +128,23 @@ impl Quadric {
 
     /// From the ten coefficients `[a, b, c, d, e, f, g, h, j, k]` of
     /// `a x² + b y² + c z² + 2d xy + 2e xz + 2f yz + 2g x + 2h y + 2j z + k`.
+    /// All zero (`0 <= 0`, all of space) or only `k > 0` (the empty set) is
+    /// [`GeometryError::Degenerate`]: a coefficient list left unfilled, not
+    /// a solid. (Only `k < 0`, all of space on purpose, is accepted.)
     pub fn from_coefficients(c: [f64; 10]) -> Result<Self, GeometryError> {
         if !c.iter().all(|x| x.is_finite()) {
             return Err(GeometryError::NonFinite { what: "a quadric coefficient" });
         }
         let [a, b, cc, d, e, f, g, h, j, k] = c;
         let m = Matrix3::new(a, d, e, d, b, f, e, f, cc);
-        Ok(Self::from_parts(Vector3::zeros(), m, Vector3::new(g, h, j), k))
+        let w = Vector3::new(g, h, j);
+        not_degenerate(&m, &w, k)?;
+        Ok(Self::from_parts(Vector3::zeros(), m, w, k))
     }
 
-    /// From a symmetric 4x4 matrix `Q` (exact symmetry is required).
+    /// From a symmetric 4x4 matrix `Q` (exact symmetry is required); the
+    /// degenerate cases of [`from_coefficients`](Self::from_coefficients)
+    /// are errors here too.
     pub fn from_matrix(q: &Matrix4<f64>) -> Result<Self, GeometryError> {
         if !q.iter().all(|x| x.is_finite()) {
             return Err(GeometryError::NonFinite { what: "a quadric matrix entry" });
@@ -151,6 +158,7 @@ impl Quadric {
         }
         let a = q.fixed_view::<3, 3>(0, 0).into_owned();
         let w = q.fixed_view::<3, 1>(0, 3).into_owned();
+        not_degenerate(&a, &w, q[(3, 3)])?;
         Ok(Self::from_parts(Vector3::zeros(), a, w, q[(3, 3)]))
     }
 
@@ -212,14 +220,114 @@ impl Quadric {
     /// rounding leaves the stored `L⁻ᵀ A L⁻¹` an eigenvalue of `-ε`. A null
     /// axis `n` (an ideal cylinder's) moves to `L n`, exactly the direction
     /// the moved solid is invariant along, however rounding left `A`.
+    ///
+    /// Unchecked: a placement that overflows leaves non-finite coefficients
+    /// ([`Quadric::is_finite`]), one that underflows a different solid;
+    /// [`try_transformed`](Self::try_transformed) reports both.
     pub fn transformed(&self, m: &Transform) -> Self {
+        let (a, w) = self.placed_parts(m);
+        let axis = m.linear() * self.axis;
+        Self::with_definiteness(m.apply_point(&Point3::from(self.centre)).coords, a, w, self.k, self.definite, axis)
+    }
+
+    /// `L⁻ᵀ A L⁻¹` (symmetrised) and `L⁻ᵀ w`, before the power-of-two
+    /// normalisation of [`Quadric::with_definiteness`].
+    fn placed_parts(&self, m: &Transform) -> (Matrix3<f64>, Vector3<f64>) {
         let li = m.linear_inverse();
         let a = li.transpose() * self.a * li;
         // Exact symmetry (the product is symmetric up to rounding only).
         let a = (a + a.transpose()) * 0.5;
-        let w = li.transpose() * self.w;
-        let axis = m.linear() * self.axis;
-        Self::with_definiteness(m.apply_point(&Point3::from(self.centre)).coords, a, w, self.k, self.definite, axis)
+        (a, li.transpose() * self.w)
+    }
+
+    /// [`transformed`](Self::transformed), checked: the same solid, or
+    /// [`GeometryError::NonFinite`] if a coefficient overflows, or
+    /// [`GeometryError::Underflow`] if a part of the solid underflows (see
+    /// [`Quadric::underflow`] for the criterion).
+    ///
+    /// ```
+    /// use quadric::{GeometryError, Quadric, Transform};
+    /// let far = Transform::scale(1e170).unwrap();
+    /// assert!(matches!(Quadric::sphere().try_transformed(&far), Err(GeometryError::Underflow { .. })));
+    /// let big = Transform::scale(1e100).unwrap();
+    /// assert_eq!(Quadric::sphere().try_transformed(&big), Ok(Quadric::sphere().transformed(&big)));
+    /// ```
+    pub fn try_transformed(&self, m: &Transform) -> Result<Self, GeometryError> {
+        let placed = self.transformed(m);
+        if !placed.is_finite() {
+            return Err(GeometryError::NonFinite { what: "a coefficient of the placed solid" });
+        }
+        let (a, w) = self.placed_parts(m);
+        match self.underflow(m.linear_inverse(), &a, &w, &placed) {
+            Some(part) => Err(GeometryError::Underflow { part }),
+            None => Ok(placed),
+        }
+    }
+
+    /// Which part of this quadric, placed as `placed` by a map with linear
+    /// inverse `li` (`a`, `w`: the placed parts before normalisation), lost
+    /// its value to underflow; `None` if none did.
+    ///
+    /// Underflow, not smallness: in exact arithmetic a congruence by an
+    /// invertible `L⁻¹` keeps every non-zero part non-zero (`A`'s rank and
+    /// signs, `w ≠ 0`), and rounding in the normal range only perturbs a
+    /// coefficient relative to the terms it is summed from. Below
+    /// `f64::MIN_POSITIVE` the error becomes absolute, so a coefficient whose
+    /// exact value is stored there (zero or subnormal, before or after the
+    /// power-of-two normalisation) has lost its bits: a unit ball scaled by
+    /// `1e170` has `A = 1e-340·I`, stored as zero (all of space), and one
+    /// scaled by `[1e170, 1, 1]` loses the `x²` term (a tube). So a part is
+    /// reported when its exact value is *real* and is stored below the
+    /// normal range. Real is decided from unit-sized copies of the columns
+    /// `l_i` of `L⁻¹` (`l_i = 2^p n_i`, `|n_i|∞` in `[1, 2)`, exact): the
+    /// diagonal entry `A'_ii = 2^2p n_iᵀ A n_i` is real when `n_iᵀAn_i`
+    /// exceeds `2⁻⁴⁰` of its terms `|n_i|ᵀ|A||n_i|` (a rotation's exact
+    /// zeros come out as rounding residue near `2⁻⁵²` of their terms, and
+    /// are never reported) and those terms are normal (a subnormal input
+    /// coefficient is the input's). The checked parts: the whole of `A` and
+    /// each diagonal entry (for a semi-definite `A` the diagonal bounds the
+    /// rest, `|A_ij|² <= A_ii A_jj`); `w_i` where `A` is flat along `l_i`
+    /// (a paraboloid's axis: there `w` alone shapes the solid; elsewhere it
+    /// only shifts the centre by `w/A`, which underflows harmlessly); and
+    /// `k`, which the normalisation alone can push down. Not reported: a
+    /// curvature lost to ordinary rounding, such as a ball scaled by
+    /// `[1e170, 1, 1]` and then rotated, whose `1e-340` sits in entries of
+    /// `0.5` (the same as `[1e20, 1, 1]` rotated, docs/errors.md).
+    fn underflow(
+        &self,
+        li: &Matrix3<f64>,
+        a: &Matrix3<f64>,
+        w: &Vector3<f64>,
+        placed: &Quadric,
+    ) -> Option<&'static str> {
+        const NORMAL: f64 = f64::MIN_POSITIVE;
+        const REAL: f64 = 1.0 / (1u64 << 40) as f64;
+        let below = |raw: f64, stored: f64| raw.abs() < NORMAL || stored.abs() < NORMAL;
+        if self.a.amax() >= NORMAL && below(a.amax(), placed.a.amax()) {
+            return Some("quadratic part");
+        }
+        let abs_a = self.a.abs();
+        for i in 0..3 {
+            let n = unit_sized(&li.column(i).into_owned());
+            let (b, terms) = (n.dot(&(self.a * n)), n.abs().dot(&(abs_a * n.abs())));
+            let curved = terms >= NORMAL && b.abs() > REAL * terms;
+            if curved && below(a[(i, i)], placed.a[(i, i)]) {
+                return Some(
+                    ["quadratic coefficient along x", "quadratic coefficient along y", "quadratic coefficient along z"]
+                        [i],
+                );
+            }
+            let (c, c_terms) = (n.dot(&self.w), n.abs().dot(&self.w.abs()));
+            if !curved && c_terms >= NORMAL && c.abs() > REAL * c_terms && below(w[i], placed.w[i]) {
+                return Some(
+                    ["linear coefficient along x", "linear coefficient along y", "linear coefficient along z"][i],
+                );
+            }
+        }
+        if self.k.abs() >= NORMAL && placed.k.abs() < NORMAL {
+            return Some("constant");
+        }
+        None
     }
 
     /// The local centre `c` the coefficients are taken around.
@@ -518,6 +626,33 @@ const REBASE_MARGIN: f64 = 1.0 / (1u64 << 40) as f64;
 /// moved `A` (`ε|A|` per entry) changes `f` by at most `2⁻¹²` of the
 /// distance term, about what the stored coefficients already carry.
 const AXIS_SLIDE_RATIO_INV2: f64 = 1.0 / (1u64 << 40) as f64;
+
+/// `v` times the power of two that brings its largest component into
+/// `[1, 2)` (zero stays zero); exact unless a component falls below the
+/// normal range relative to the largest.
+fn unit_sized(v: &Vector3<f64>) -> Vector3<f64> {
+    let m = v.amax();
+    if !(m > 0.0 && m.is_finite()) {
+        return *v;
+    }
+    // Two factors, each a normal power of two, cover every finite `m`.
+    let e = m.log2().floor() as i32;
+    v * pow2(-e / 2) * pow2(-e - (-e / 2))
+}
+
+/// The degenerate coefficient sets `from_coefficients` and `from_matrix`
+/// refuse: no quadratic or linear part and a constant `k >= 0`.
+fn not_degenerate(a: &Matrix3<f64>, w: &Vector3<f64>, k: f64) -> Result<(), GeometryError> {
+    if *a != Matrix3::zeros() || *w != Vector3::zeros() || k < 0.0 {
+        Ok(())
+    } else if k == 0.0 {
+        Err(GeometryError::Degenerate { reason: "all ten coefficients are zero (0 <= 0 holds everywhere)" })
+    } else {
+        Err(GeometryError::Degenerate {
+            reason: "only the constant k is non-zero and it is positive (k <= 0 holds nowhere: the solid is empty)",
+        })
+    }
+}
 
 /// The exact null axis of `A` that `w` is orthogonal to, for the cases
 /// decided without rounding: exactly one zero row of `A` (an axis-aligned

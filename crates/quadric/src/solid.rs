@@ -2,7 +2,7 @@
 
 use nalgebra::{Point3, Vector3};
 
-use crate::{HalfSpace, IntervalSet, Quadric, Ray, Transform};
+use crate::{GeometryError, HalfSpace, IntervalSet, Quadric, Ray, Transform};
 
 /// A solid a block is built from: a quadric or a half-space (each of which
 /// may already be a complement, since both complement exactly).
@@ -50,6 +50,16 @@ impl Solid {
             Solid::Quadric(q) => Solid::Quadric(q.transformed(m)),
             Solid::HalfSpace(h) => Solid::HalfSpace(h.transformed(m)),
         }
+    }
+
+    /// The solid moved by `m`, checked: an error if a coefficient overflows
+    /// or a part of the solid underflows ([`Quadric::try_transformed`],
+    /// [`HalfSpace::try_transformed`]).
+    pub fn try_transformed(&self, m: &Transform) -> Result<Self, GeometryError> {
+        Ok(match self {
+            Solid::Quadric(q) => Solid::Quadric(q.try_transformed(m)?),
+            Solid::HalfSpace(h) => Solid::HalfSpace(h.try_transformed(m)?),
+        })
     }
 
     /// The set of `λ >= 0` where the ray is inside; finite ends carry `solid`.

@@ -299,3 +299,171 @@ fn value_of_a_far_cone() {
     assert!(moved.contains_point(&x));
     assert!(!moved.intervals(&ray, 0).is_empty(), "the ray starts inside");
 }
+
+/// Constant coefficient sets: all zero and a positive constant alone are
+/// refused by both constructors; a negative constant (all of space) is a
+/// solid.
+#[test]
+fn constant_quadrics_are_refused_unless_all_of_space() {
+    let degenerate = |r: Result<Quadric, GeometryError>| matches!(r, Err(GeometryError::Degenerate { .. }));
+    let cases: [([f64; 10], bool); 6] = [
+        ([0.0; 10], true),
+        ([-0.0; 10], true),
+        ([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0], true),
+        ([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5e-324], true),
+        ([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0], false),
+        ([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5e-324, 0.0, 0.0, 1.0], false),
+    ];
+    for (c, refused) in cases {
+        assert_eq!(degenerate(Quadric::from_coefficients(c)), refused, "{c:?}");
+        let [a, b, cc, d, e, f, g, h, j, k] = c;
+        let m = Matrix4::new(a, d, e, g, d, b, f, h, e, f, cc, j, g, h, j, k);
+        assert_eq!(degenerate(Quadric::from_matrix(&m)), refused, "{m:?}");
+    }
+    assert_eq!(
+        Quadric::from_coefficients([0.0; 10]).expect_err("all zero").to_string(),
+        "the quadric is degenerate: all ten coefficients are zero (0 <= 0 holds everywhere)"
+    );
+    // The half-space's constant alone is the zero normal, refused as before.
+    assert_eq!(HalfSpace::new(0.0, 0.0, 0.0, 1.0), Err(GeometryError::ZeroNormal));
+    assert_eq!(HalfSpace::new(0.0, 0.0, 0.0, 0.0), Err(GeometryError::ZeroNormal));
+}
+
+fn scale(s: f64) -> Transform {
+    Transform::scale(s).expect("valid")
+}
+
+fn scale_xyz(x: f64, y: f64, z: f64) -> Transform {
+    Transform::scale_xyz(Vector3::new(x, y, z)).expect("valid")
+}
+
+fn rotate_x(deg: f64) -> Transform {
+    Transform::rotate_x_degrees(deg).expect("valid")
+}
+
+fn rotate_z(deg: f64) -> Transform {
+    Transform::rotate_z_degrees(deg).expect("valid")
+}
+
+/// `solid` placed by `steps` in order (composed with `then`, as a scene
+/// composes them): `Ok(())` or the error `try_transformed` gives; when it
+/// is accepted, it is exactly the unchecked `transformed`.
+fn check_placement(solid: impl Into<Solid>, steps: &[Transform], expected: Result<(), GeometryError>) {
+    let solid = solid.into();
+    let m = steps.iter().fold(Transform::identity(), |m, s| m.then(s));
+    let got = solid.try_transformed(&m);
+    assert_eq!(got.as_ref().map(|_| ()).map_err(Clone::clone), expected, "{solid:?} by {steps:?}");
+    if let Ok(placed) = got {
+        assert_eq!(placed, solid.transformed(&m));
+    }
+}
+
+fn underflow(part: &'static str) -> Result<(), GeometryError> {
+    Err(GeometryError::Underflow { part })
+}
+
+const OVERFLOW: Result<(), GeometryError> = Err(GeometryError::NonFinite { what: "a coefficient of the placed solid" });
+
+#[test]
+fn placements_that_underflow_or_overflow_are_errors() {
+    let plane = HalfSpace::new(1.0, 0.0, 0.0, -1.0).expect("valid");
+    let faint_plane = HalfSpace::new(1e-200, 0.0, 0.0, -1.0).expect("valid");
+    let sphere = Quadric::sphere();
+    // A unit ball scaled far: `A = 1e-340·I` is zero, all of space.
+    check_placement(sphere, &[scale(1e170)], underflow("quadratic part"));
+    // `1e-320` is subnormal: eleven bits left of the radius.
+    check_placement(sphere, &[scale(1e160)], underflow("quadratic part"));
+    check_placement(sphere, &[scale(1e170), rotate_x(30.0)], underflow("quadratic part"));
+    check_placement(sphere, &[scale(1e85), scale(1e85)], underflow("quadratic part"));
+    // Tiny scales overflow `A` (`1e340`; `1e308` too, doubled when it is
+    // symmetrised). Just short of that, the normalisation pushes a `k`
+    // below 1 (here `-0.75` beside `A = 1.5`) into the subnormals.
+    check_placement(sphere, &[scale(1e-170)], OVERFLOW);
+    check_placement(sphere, &[scale(1e-160)], OVERFLOW);
+    check_placement(sphere, &[scale(1e-154)], OVERFLOW);
+    let half = Quadric::from_coefficients([1.5, 1.5, 1.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -0.75]).expect("a ball");
+    check_placement(half, &[scale(2f64.powi(-511))], underflow("constant"));
+    check_placement(half, &[scale(2f64.powi(-510))], Ok(()));
+    // One axis: the ball becomes a tube.
+    check_placement(sphere, &[scale_xyz(1e170, 1.0, 1.0)], underflow("quadratic coefficient along x"));
+    check_placement(sphere, &[scale_xyz(1.0, 1.0, 1e170)], underflow("quadratic coefficient along z"));
+    check_placement(sphere, &[scale_xyz(1.0, 1e170, 1.0), rotate_z(90.0)], underflow("quadratic coefficient along x"));
+    check_placement(Quadric::tube_y(), &[scale_xyz(1e170, 1.0, 1.0)], underflow("quadratic coefficient along x"));
+    check_placement(Quadric::cone(), &[scale(1e170)], underflow("quadratic part"));
+    check_placement(Quadric::cone(), &[scale_xyz(1.0, 1e170, 1.0)], underflow("quadratic coefficient along y"));
+    // A paraboloid squeezed across its axis: `A = 2^1022`, `w` normalised to a subnormal.
+    check_placement(
+        Quadric::paraboloid(),
+        &[scale_xyz(2f64.powi(-511), 1.0, 2f64.powi(-511))],
+        underflow("linear coefficient along y"),
+    );
+    check_placement(faint_plane, &[scale(1e170)], underflow("half-space normal"));
+    check_placement(plane, &[scale(1e200), scale(1e200)], OVERFLOW);
+}
+
+#[test]
+fn placements_near_the_limits_are_accepted() {
+    let plane = HalfSpace::new(1.0, 0.0, 0.0, -1.0).expect("valid");
+    let sphere = Quadric::sphere();
+    for s in [1e100, 1e-100, 1e150, 1e-150, 1e153, -1e153] {
+        check_placement(sphere, &[scale(s)], Ok(()));
+        check_placement(sphere, &[scale(s), rotate_x(30.0), rotate_z(-70.0)], Ok(()));
+        check_placement(Quadric::cone(), &[rotate_x(1e-120), scale(s)], Ok(()));
+        check_placement(plane, &[scale(s)], Ok(()));
+    }
+    // Scaling a tube along its own axis leaves its exact zero alone.
+    check_placement(Quadric::tube_y(), &[scale_xyz(1.0, 1e170, 1.0)], Ok(()));
+    check_placement(Quadric::tube_y(), &[scale_xyz(1.0, 1e300, 1.0)], Ok(()));
+    // A plane's normal underflowing in one component only tilts it by nothing.
+    check_placement(plane, &[rotate_z(1e-200), scale_xyz(1.0, 1e170, 1.0)], Ok(()));
+    // The curvature `1e-340` is lost in entries of `0.5` by rounding, not by
+    // underflow: the same solid as `[1e20, 1, 1]` rotated (a tube).
+    check_placement(sphere, &[scale_xyz(1e170, 1.0, 1.0), rotate_z(45.0)], Ok(()));
+    // Far and back again.
+    check_placement(sphere, &[scale(1e200), scale(1e-199)], Ok(()));
+}
+
+/// The near-limit placements are the right solids: inside and outside
+/// points at ±1 % of the radius, and a ray through the centre enters and
+/// leaves at the radius.
+#[test]
+fn near_limit_scales_give_the_right_solid() {
+    for r in [1e100, 1e-100, 1e150, 1e-150] {
+        for turn in [Transform::identity(), rotate_x(30.0).then(&rotate_z(-70.0))] {
+            let ball = Quadric::sphere().try_transformed(&scale(r).then(&turn)).expect("in range");
+            for d in [Vector3::x(), Vector3::y(), Vector3::new(1.0, 2.0, -2.0) / 3.0] {
+                assert!(ball.contains_point(&Point3::from(d * 0.99 * r)), "{r} {d:?}");
+                assert!(!ball.contains_point(&Point3::from(d * 1.01 * r)), "{r} {d:?}");
+                let ray = Ray::new(Point3::from(-d * 3.0 * r), d).expect("valid");
+                let set = ball.intervals(&ray, 0);
+                assert_eq!(set.len(), 1, "{r} {d:?}");
+                let iv = set.as_slice()[0];
+                for (t, want) in [(iv.enter.t, 2.0 * r), (iv.exit.t, 4.0 * r)] {
+                    assert!((t - want).abs() <= 1e-12 * r, "{r} {d:?}: {t} vs {want}");
+                }
+            }
+        }
+        let plane = HalfSpace::new(1.0, 0.0, 0.0, -1.0).expect("valid").try_transformed(&scale(r)).expect("in range");
+        assert!(plane.contains_point(&Point3::new(0.99 * r, 0.0, 0.0)));
+        assert!(!plane.contains_point(&Point3::new(1.01 * r, 0.0, 0.0)));
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// No false positives: moderate placements (random steps, up to four,
+    /// scales 0.25 … 4, and a scale of up to `10^±100`) of any solid are
+    /// accepted, and give exactly the unchecked placement.
+    #[test]
+    fn moderate_placements_never_underflow(
+        solid in strategies::solid(),
+        m in strategies::transform(),
+        far in magnitude(-100.0, 100.0),
+    ) {
+        for m in [m, m.then(&scale(far)), scale(far).then(&m)] {
+            let placed = solid.try_transformed(&m);
+            prop_assert_eq!(placed, Ok(solid.transformed(&m)), "{:?} by {:?}", solid, m);
+        }
+    }
+}
