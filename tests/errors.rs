@@ -181,6 +181,74 @@ fn numbers_overflowing_to_infinity_are_refused() {
 }
 
 #[test]
+fn transforms_underflowing_are_refused() {
+    let underflow = "underflows: it would be stored below the smallest normal number (2.2e-308), \
+                     so the solid would not be the one described";
+    // A unit ball scaled by 1e170 would be all of space.
+    check(
+        &*blocks(r#"{ "name": "far", "objects": [ { "sphere": {}, "transform": [ { "scale": 1e170 } ] } ] }"#),
+        1,
+        &[
+            "error: bad.json: blocks[0].objects[0], line 1, column 127: block \"far\", object 1: the transforms \
+             (the object's, the block's and its groups') underflow: the placed solid's quadratic part",
+            underflow,
+        ],
+    );
+    // One axis only: it would be a tube.
+    check(
+        &*blocks(r#"{ "name": "far", "objects": [ { "sphere": {}, "transform": [ { "scale": [1e170, 1, 1] } ] } ] }"#),
+        1,
+        &["blocks[0].objects[0], line 1, column 127", "underflow: the placed solid's quadratic coefficient along x"],
+    );
+    // Spread over the object's and the block's transforms.
+    check(
+        &*blocks(
+            r#"{ "name": "far", "transform": [ { "scale": 1e100 } ], "objects": [ { "sphere": {}, "transform": [ { "scale": 1e70 } ] } ] }"#,
+        ),
+        1,
+        &["blocks[0].objects[0], line 1, column 164", "block \"far\", object 1", "underflow", underflow],
+    );
+    // A radius does it alone.
+    check(
+        &*blocks(r#"{ "name": "far", "objects": [ { "sphere": { "radius": 1e200 } } ] }"#),
+        1,
+        &["blocks[0].objects[0], line 1, column 127: block \"far\", object 1: sphere.radius 1e200: the placed solid's quadratic part", underflow],
+    );
+}
+
+/// `komplex check` refuses what `render` refuses, with the same message.
+#[test]
+fn check_reports_underflow_and_degenerate_quadrics() {
+    let dir = tempdir();
+    for (b, needle) in [
+        (r#"{ "objects": [ { "sphere": {}, "transform": [ { "scale": 1e170 } ] } ] }"#, "underflow"),
+        (r#"{ "objects": [ { "quadric": [0, 0, 0, 0, 0, 0, 0, 0, 0, 1] } ] }"#, "the solid is empty"),
+    ] {
+        write_scene(dir.path(), "bad.json", &blocks(b));
+        let o = komplex(dir.path(), &["check", "bad.json"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+        assert!(err.starts_with("error: bad.json: blocks[0].objects[0], line 1") && err.contains(needle), "{err}");
+    }
+}
+
+#[test]
+fn degenerate_quadrics_are_refused() {
+    check(
+        &*blocks(r#"{ "name": "q", "objects": [ { "quadric": [0, 0, 0, 0, 0, 0, 0, 0, 0, 0] } ] }"#),
+        1,
+        &["error: bad.json: blocks[0].objects[0], line 1, column 125: block \"q\", object 1: the quadric is degenerate: \
+           all ten coefficients are zero (0 <= 0 holds everywhere)"],
+    );
+    check(
+        &*blocks(r#"{ "name": "q", "objects": [ { "quadric": [0, 0, 0, 0, 0, 0, 0, 0, 0, 1] } ] }"#),
+        1,
+        &["error: bad.json: blocks[0].objects[0], line 1, column 125: block \"q\", object 1: the quadric is degenerate: \
+           only the constant k is non-zero and it is positive (k <= 0 holds nowhere: the solid is empty)"],
+    );
+}
+
+#[test]
 fn semantic_errors_name_the_block_and_object() {
     check(
         &*format!(

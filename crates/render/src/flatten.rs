@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 
 use complex::{Block, MaterialKey, Opacity};
 use quadric::nalgebra::{Matrix4, Vector3};
-use quadric::{HalfSpace, Quadric, Solid, Transform};
+use quadric::{GeometryError, HalfSpace, Quadric, Solid, Transform};
 
 use crate::error::SceneError;
 use crate::format::{Axis, Entry, MaterialSpec, ObjectSpec, Scale, SceneFile, Step};
@@ -241,16 +241,17 @@ impl Flattener<'_> {
             let at = place.item("objects", j);
             let solid = solid_of(o, at).map_err(|err| err.with_owner(&who(j).to_string()))?;
             let m = steps_transform(&o.transform, at).map_err(|err| err.with_owner(&who(j).to_string()))?;
-            let solid = solid.transformed(&m.then(&placement));
-            let finite = match &solid {
-                Solid::Quadric(q) => q.is_finite(),
-                Solid::HalfSpace(h) => h.is_finite(),
-            };
-            if !finite {
-                let msg = "the transforms (the object's, the block's and its groups') overflow: \
-                           the placed solid has coefficients that are not finite";
-                return Err(SceneError::semantic(&at.to_string(), format!("{}: {msg}", who(j))));
-            }
+            let solid = solid.try_transformed(&m.then(&placement)).map_err(|e| {
+                let msg = match e {
+                    GeometryError::Underflow { .. } => {
+                        format!("the transforms (the object's, the block's and its groups') underflow: {e}")
+                    }
+                    _ => "the transforms (the object's, the block's and its groups') overflow: \
+                          the placed solid has coefficients that are not finite"
+                        .to_string(),
+                };
+                SceneError::semantic(&at.to_string(), format!("{}: {msg}", who(j)))
+            })?;
             solids.push(if o.complement { solid.complement() } else { solid });
             solid_materials.push(match &o.material {
                 Some(mat) => self.material(mat, at.key("material"), &who(j))?,
@@ -312,12 +313,18 @@ fn solid_of(o: &ObjectSpec, place: Place<'_>) -> Result<Solid, SceneError> {
             Some(r) => Err(err(format!("{what} must be finite and > 0, got {r}"))),
         }
     };
+    // A radius far from 1 can underflow the unit solid's coefficients (an
+    // overflow is left to the check after the transforms, as before).
+    let sized = |q: Quadric, m: &Transform, what: &str, r: f64| match q.try_transformed(m) {
+        Err(e @ GeometryError::Underflow { .. }) => Err(err(format!("{what} {r:e}: {e}"))),
+        _ => Ok(Solid::from(q.transformed(m))),
+    };
     Ok(if let Some(s) = &o.sphere {
         let r = positive(s.radius, "sphere.radius")?;
         let c = s.center.unwrap_or([0.0; 3]);
         finite_triple(&c, place, "sphere.center")?;
         let m = Transform::scale(r).map_err(geo)?.then(&Transform::translate(vec3(c)).map_err(geo)?);
-        Solid::from(Quadric::sphere().transformed(&m))
+        sized(Quadric::sphere(), &m, "sphere.radius", r)?
     } else if let Some(c) = &o.cylinder {
         let r = positive(c.radius, "cylinder.radius")?;
         let tube = match c.axis.unwrap_or_default() {
@@ -325,7 +332,7 @@ fn solid_of(o: &ObjectSpec, place: Place<'_>) -> Result<Solid, SceneError> {
             Axis::Y => Quadric::tube_y(),
             Axis::Z => Quadric::tube_z(),
         };
-        Solid::from(tube.transformed(&Transform::scale(r).map_err(geo)?))
+        sized(tube, &Transform::scale(r).map_err(geo)?, "cylinder.radius", r)?
     } else if o.cone.is_some() {
         Solid::from(Quadric::cone())
     } else if o.paraboloid.is_some() {
