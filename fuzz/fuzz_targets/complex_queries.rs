@@ -134,7 +134,7 @@ fn check_cast(c: &Complex, ray: &Ray, max_t: f64, p: &Partition, accurate: bool)
 fuzz_target!(|input: ComplexInput| {
     let blocks: Vec<Block> = input.blocks.iter().enumerate().filter_map(|(i, b)| build_block(i, b)).collect();
     let epsilon = input.epsilon.map(|e| e.value());
-    let c = Complex::new(blocks, ComplexOptions { epsilon });
+    let c = Complex::new(blocks, ComplexOptions { epsilon, ..Default::default() });
     let eps_ok = epsilon.map_or(true, |e| e.is_finite() && e >= 0.0);
     assert_eq!(c.is_ok(), eps_ok, "ε = {epsilon:?}: {:?}", c.as_ref().err());
     let Ok(c) = c else { return };
