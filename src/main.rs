@@ -63,12 +63,8 @@ struct RenderArgs {
     png: Option<PathBuf>,
     #[command(flatten)]
     size: SizeArgs,
-    /// Worker threads [default: one per core].
-    #[arg(long, value_name = "N")]
-    threads: Option<usize>,
-    /// Precision mode of the kernel (docs/accuracy.md).
-    #[arg(long, value_enum, default_value_t = PrecisionArg::Accurate)]
-    precision: PrecisionArg,
+    #[command(flatten)]
+    run: RunArgs,
     /// Anti-aliasing: an N×N grid of rays per pixel (overrides settings.samples).
     #[arg(long, value_name = "N")]
     samples: Option<u32>,
@@ -116,12 +112,8 @@ struct BenchArgs {
     scenes: Vec<PathBuf>,
     #[command(flatten)]
     size: SizeArgs,
-    /// Worker threads [default: one per core].
-    #[arg(long, value_name = "N")]
-    threads: Option<usize>,
-    /// Precision mode of the kernel (docs/accuracy.md).
-    #[arg(long, value_enum, default_value_t = PrecisionArg::Accurate)]
-    precision: PrecisionArg,
+    #[command(flatten)]
+    run: RunArgs,
     /// Renders per scene (loaded once): the render time is the fastest, the median is printed too.
     #[arg(long, value_name = "R", default_value_t = 1)]
     runs: u32,
@@ -134,6 +126,17 @@ struct GenerateArgs {
     /// Output file [default: stdout].
     #[arg(short, long, value_name = "OUT.json", global = true)]
     output: Option<PathBuf>,
+}
+
+/// `--threads`/`--precision`, shared by the commands that render.
+#[derive(clap::Args)]
+struct RunArgs {
+    /// Worker threads [default: one per core].
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
+    /// Precision mode of the kernel (docs/accuracy.md).
+    #[arg(long, value_enum, default_value_t = PrecisionArg::Accurate)]
+    precision: PrecisionArg,
 }
 
 /// `--width`/`--height`, shared by the commands that make an image.
@@ -232,7 +235,7 @@ fn run(command: Command) -> Result<(), Error> {
 /// `komplex render`: the EXR (and the PNG preview), both checked writable
 /// before the render and written only once it is complete.
 fn render(args: RenderArgs) -> Result<(), Error> {
-    let RenderArgs { scene, output, png, size, threads, precision, samples, half, exposure } = args;
+    let RenderArgs { scene, output, png, size, run: RunArgs { threads, precision }, samples, half, exposure } = args;
     render::frame::set_global_threads(threads)?;
     let cancel = interrupt_flag();
     if !exposure.is_finite() {
@@ -337,7 +340,7 @@ fn export_pov(args: ExportPovArgs) -> Result<(), Error> {
 
 /// `komplex bench`: one table row per scene.
 fn bench(args: BenchArgs) -> Result<(), Error> {
-    let BenchArgs { scenes, size, threads, precision, runs } = args;
+    let BenchArgs { scenes, size, run: RunArgs { threads, precision }, runs } = args;
     if !(1..=1000).contains(&runs) {
         return Err(Error::Options(format!("--runs must be between 1 and 1000, got {runs}")));
     }
