@@ -313,11 +313,12 @@ fn solid_of(o: &ObjectSpec, place: Place<'_>) -> Result<Solid, SceneError> {
             Some(r) => Err(err(format!("{what} must be finite and > 0, got {r}"))),
         }
     };
-    // A radius far from 1 can underflow the unit solid's coefficients (an
-    // overflow is left to the check after the transforms, as before).
+    // A radius far from 1 can underflow the unit solid's coefficients; an
+    // overflow is left to the check after all the transforms, which names it.
     let sized = |q: Quadric, m: &Transform, what: &str, r: f64| match q.try_transformed(m) {
+        Ok(placed) => Ok(Solid::from(placed)),
         Err(e @ GeometryError::Underflow { .. }) => Err(err(format!("{what} {r:e}: {e}"))),
-        _ => Ok(Solid::from(q.transformed(m))),
+        Err(_) => Ok(Solid::from(q.transformed(m))),
     };
     Ok(if let Some(s) = &o.sphere {
         let r = positive(s.radius, "sphere.radius")?;
