@@ -388,6 +388,18 @@ fn symmetric_eigen(a: &Matrix3<f64>) -> Option<(Vector3<f64>, Matrix3<f64>)> {
             if apq.abs() <= f64::EPSILON * f64::EPSILON * norm {
                 continue;
             }
+            // An entry too small to change either diagonal entry, even a
+            // hundredfold, is zeroed without a rotation (Numerical Recipes
+            // §11.1). Rotating instead turns a near multiple of the identity
+            // (a rotated sphere) by 45° sweep after sweep while the entry
+            // hovers at ε²‖A‖, and `V` drifts out of orthogonality until the
+            // check below fails and the block loses its box.
+            let g = 100.0 * apq.abs();
+            if m[(p, p)].abs() + g == m[(p, p)].abs() && m[(q, q)].abs() + g == m[(q, q)].abs() {
+                m[(p, q)] = 0.0;
+                m[(q, p)] = 0.0;
+                continue;
+            }
             // The rotation that zeroes m[p][q], by its smaller angle (Numerical Recipes §11.1).
             let theta = (m[(q, q)] - m[(p, p)]) / (2.0 * apq);
             let t = theta.signum() / (theta.abs() + theta.hypot(1.0));
