@@ -4,6 +4,8 @@
 //! (`cast_many`) and traced (`trace_many`) (16,384 rays from outside the
 //! cube at random points inside it), per second; `cast_many` on one thread
 //! against `cast_ray` one by one, on those rays and on a camera's.
+//! `classify_large` and `trace_many_large` do the same on the
+//! 100,000-block scene (two threads).
 //!
 //! `cargo bench -p complex --bench batch`.
 
@@ -29,16 +31,29 @@ fn pool(threads: usize) -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("a pool")
 }
 
-/// The complex and its rays.
+/// The large scene's number of blocks.
+const LARGE: usize = 100_000;
+
+/// The complex of `BLOCKS` blocks and its rays.
 fn complex_and_rays() -> (Complex, Vec<Ray>) {
-    let (blocks, rays) = blocks_and_rays(BLOCKS, false, RAYS);
+    complex_and_rays_of(BLOCKS)
+}
+
+/// The complex of `n` blocks and its rays.
+fn complex_and_rays_of(n: usize) -> (Complex, Vec<Ray>) {
+    let (blocks, rays) = blocks_and_rays(n, false, RAYS);
     (Complex::new(blocks, complex::ComplexOptions::default()).expect("valid"), rays)
 }
 
-/// Points spread evenly (a Weyl sequence, no generator needed) over the
-/// cube the blocks fill, a margin of 10 % around it.
+/// Points spread evenly over the cube of `BLOCKS` blocks.
 fn points() -> Vec<Point3<f64>> {
-    let side = 2.0 * (BLOCKS as f64).cbrt();
+    points_of(BLOCKS)
+}
+
+/// Points spread evenly (a Weyl sequence, no generator needed) over the
+/// cube `n` blocks fill, a margin of 10 % around it.
+fn points_of(n: usize) -> Vec<Point3<f64>> {
+    let side = 2.0 * (n as f64).cbrt();
     let frac = |x: f64| x - x.floor();
     (0..POINTS)
         .map(|i| {
@@ -75,6 +90,29 @@ fn trace_many(bencher: divan::Bencher, threads: usize) {
     let (c, rays) = complex_and_rays();
     let mut traces = Traces::new();
     let pool = pool(threads);
+    bencher.counter(ItemsCount::new(rays.len())).bench_local(|| {
+        pool.install(|| c.trace_many(divan::black_box(&rays), &mut traces));
+    });
+}
+
+/// `classify` on the 100,000-block scene, two threads.
+#[divan::bench(sample_count = 20, sample_size = 1)]
+fn classify_large(bencher: divan::Bencher) {
+    let (c, _) = complex_and_rays_of(LARGE);
+    let points = points_of(LARGE);
+    let mut owners = vec![None; points.len()];
+    let pool = pool(2);
+    bencher.counter(ItemsCount::new(points.len())).bench_local(|| {
+        pool.install(|| c.classify(divan::black_box(&points), &mut owners).expect("lengths match"));
+    });
+}
+
+/// `trace_many` on the 100,000-block scene, two threads.
+#[divan::bench(sample_count = 20, sample_size = 1)]
+fn trace_many_large(bencher: divan::Bencher) {
+    let (c, rays) = complex_and_rays_of(LARGE);
+    let mut traces = Traces::new();
+    let pool = pool(2);
     bencher.counter(ItemsCount::new(rays.len())).bench_local(|| {
         pool.install(|| c.trace_many(divan::black_box(&rays), &mut traces));
     });
