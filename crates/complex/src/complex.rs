@@ -8,6 +8,7 @@ use crate::bounds::block_boxes;
 use crate::bvh::{Bvh, RayBoxes, RayBoxes4};
 use crate::kernel::Kernel;
 use crate::partition::{BlockSpans, Event};
+use crate::point_grid::PointGrid;
 use crate::{Aabb, Block, BlockId, ComplexError};
 
 /// The default ε relative to the scene's size: `ε = DEFAULT_RELATIVE_EPSILON · D`
@@ -107,6 +108,8 @@ pub struct Complex {
     slot_of: Vec<u32>,
     /// Blocks with an infinite box: tested for every ray.
     unbounded: Vec<u32>,
+    /// The bounded blocks by cell, for point queries.
+    points: PointGrid,
     epsilon: f64,
     any_transparent: bool,
 }
@@ -146,13 +149,14 @@ impl Complex {
             }
         });
         let bvh = Bvh::build(&bounded);
+        let points = PointGrid::new(&bounded);
         let kernel = Kernel::new(bvh.items(), &blocks, &balls);
         let mut slot_of = vec![u32::MAX; blocks.len()];
         for k in 0..kernel.len() as u32 {
             slot_of[kernel.block(k) as usize] = k;
         }
         let any_transparent = blocks.iter().any(Block::is_transparent);
-        let mut complex = Complex { blocks, boxes, bvh, kernel, slot_of, unbounded, epsilon, any_transparent };
+        let mut complex = Complex { blocks, boxes, bvh, kernel, slot_of, unbounded, points, epsilon, any_transparent };
         if options.precision != quadric::Precision::default() {
             complex.set_precision(options.precision);
         }
@@ -401,17 +405,27 @@ impl Complex {
             return None;
         }
         let (mut opaque, mut transparent) = (u32::MAX, u32::MAX);
-        let mut consider = |i: u32| {
+        // The cell's blocks come in ascending order: the first opaque one
+        // holding `p` owns it, whatever follows.
+        for &i in self.points.cell_blocks(p) {
+            let b = &self.blocks[i as usize];
+            if !self.boxes[i as usize].contains_point(p) {
+                continue;
+            }
+            if !b.is_transparent() {
+                if b.contains_point(p) {
+                    opaque = i;
+                    break;
+                }
+            } else if transparent == u32::MAX && b.contains_point(p) {
+                transparent = i;
+            }
+        }
+        for &i in self.points.wide_blocks().iter().chain(&self.unbounded) {
             let b = &self.blocks[i as usize];
             let best = if b.is_transparent() { &mut transparent } else { &mut opaque };
-            if i < *best && b.contains_point(p) {
+            if i < *best && self.boxes[i as usize].contains_point(p) && b.contains_point(p) {
                 *best = i;
-            }
-        };
-        self.bvh.visit_point(&[p.x, p.y, p.z], &mut consider);
-        for &i in &self.unbounded {
-            if self.boxes[i as usize].contains_point(p) {
-                consider(i);
             }
         }
         [opaque, transparent].into_iter().find(|&i| i != u32::MAX).map(BlockId)

@@ -19,6 +19,7 @@ mod complex;
 mod error;
 mod kernel;
 mod partition;
+mod point_grid;
 mod spawn;
 
 pub use batch::Traces;

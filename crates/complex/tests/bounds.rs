@@ -63,10 +63,10 @@ fn rotated_balls_keep_their_tight_box() {
             unbounded += 1;
             continue;
         }
-        for k in 0..3 {
-            let tol = 1e-6 * (r + c[k]);
-            assert!(b.min[k] <= c[k] - r && c[k] - r - tol <= b.min[k], "ball {i}: {b:?}");
-            assert!(c[k] + r <= b.max[k] && b.max[k] <= c[k] + r + tol, "ball {i}: {b:?}");
+        for (k, &ck) in c.iter().enumerate() {
+            let tol = 1e-6 * (r + ck);
+            assert!(b.min[k] <= ck - r && ck - r - tol <= b.min[k], "ball {i}: {b:?}");
+            assert!(ck + r <= b.max[k] && b.max[k] <= ck + r + tol, "ball {i}: {b:?}");
         }
     }
     assert_eq!(unbounded, 0, "rotated balls without a box");

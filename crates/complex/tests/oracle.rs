@@ -465,3 +465,35 @@ fn a_complex_is_send_and_sync() {
     fn check<T: Send + Sync>() {}
     check::<Complex>();
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases((ProptestConfig::default().cases / 16).max(8)))]
+
+    /// `contains_point` (the point grid, its list of blocks too wide for a
+    /// cell, the unbounded blocks) finds the owner that membership in every
+    /// block and the priority rule give, on scenes of small blocks with a
+    /// few big and unbounded ones among them.
+    #[test]
+    fn point_owner_agrees_with_membership_with_big_blocks(
+        specs in proptest::collection::vec(small_block(), 60..200),
+        big in proptest::collection::vec((0usize..3, any::<bool>(), 0usize..200), 1..4),
+        points in proptest::collection::vec(strategies::point(3.5), 300),
+    ) {
+        use crate::common::{cuboid, hs};
+        let mut specs = specs;
+        for (kind, transparent, at) in big {
+            let solids = match kind {
+                0 => cuboid([-3.0, -3.0, -0.5], [3.0, 3.0, 0.5]),
+                1 => vec![Solid::from(Quadric::sphere().transformed(&quadric::Transform::scale(2.5).expect("finite")))],
+                _ => vec![hs(0.3, 1.0, -0.2, 0.1)],
+            };
+            specs.insert(at.min(specs.len()), (solids, transparent, 0));
+        }
+        let c = build(&specs);
+        let transparent: Vec<bool> = c.blocks().iter().map(Block::is_transparent).collect();
+        for x in &points {
+            let inside: Vec<bool> = c.blocks().iter().map(|b| b.contains_point(x)).collect();
+            prop_assert_eq!(c.contains_point(x), oracle_owner(&inside, &transparent), "at {:?}", x);
+        }
+    }
+}

@@ -188,12 +188,6 @@ impl Bvh {
     ) {
         with_tree!(&self.nodes, t => t.traverse4(rays, active, t_min, t_max, visit))
     }
-
-    /// Visits the blocks whose boxes contain `p` (at the depth limit, every
-    /// block of a leaf whose box contains it; see [`Bvh::traverse`]).
-    pub(crate) fn visit_point(&self, p: &[f64; 3], visit: impl FnMut(u32)) {
-        with_tree!(&self.nodes, t => t.visit_point(&self.items, p, visit))
-    }
 }
 
 impl<const W: usize, const H: usize> Wide<W, H> {

@@ -171,38 +171,6 @@ impl<const W: usize, const H: usize> Tree<W, H> {
             }
         }
     }
-
-    /// [`Bvh::visit_point`], with the leaves pointing into `items`.
-    pub(super) fn visit_point(&self, items: &[u32], p: &[f64; 3], mut visit: impl FnMut(u32)) {
-        if self.nodes.is_empty() {
-            return;
-        }
-        let mut stack: ArrayVec<u32, STACK> = ArrayVec::new();
-        stack.push(0);
-        while let Some(n) = stack.pop() {
-            let node = &self.nodes[n as usize];
-            for lane in 0..W {
-                let inside = (0..3).all(|i| {
-                    let (lo, hi) = (
-                        node.group[lane / 4].min[i].as_array_ref()[lane % 4],
-                        node.group[lane / 4].max[i].as_array_ref()[lane % 4],
-                    );
-                    lo <= p[i] && p[i] <= hi
-                });
-                if !inside {
-                    continue;
-                }
-                let (child, count) = (node.child[lane], node.count[lane]);
-                if count > 0 {
-                    for &item in &items[child as usize..(child + count) as usize] {
-                        visit(item);
-                    }
-                } else {
-                    stack.push(child);
-                }
-            }
-        }
-    }
 }
 
 /// Inserts `item` into the first `*n` entries of `order`, kept sorted by
