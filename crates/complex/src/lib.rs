@@ -28,5 +28,7 @@ pub use bounds::Aabb;
 pub use complex::{Complex, ComplexOptions, Hit, Occluder, DEFAULT_RELATIVE_EPSILON};
 pub use error::ComplexError;
 pub use partition::{Event, Partition, Segment, Surface};
+/// The kernel's precision modes: `quadric`'s type, re-exported (one type, documented there).
+#[doc(no_inline)]
 pub use quadric::Precision;
 pub use spawn::{spawn_origin, Spawner, MARGIN as SPAWN_MARGIN};

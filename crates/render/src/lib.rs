@@ -41,6 +41,8 @@ pub mod shade;
 pub mod trace;
 pub mod world;
 
+/// The kernel's precision modes: `quadric`'s type, re-exported (one type, documented there).
+#[doc(no_inline)]
 pub use complex::Precision;
 pub use convert::load;
 pub use error::{nearest, Error, SceneError};
