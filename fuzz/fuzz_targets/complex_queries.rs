@@ -40,9 +40,11 @@ fn build_block(i: usize, spec: &BlockSpec) -> Option<Block> {
     match &block {
         Err(ComplexError::EmptyBlock { .. }) => assert!(solids.is_empty()),
         Err(ComplexError::NonFinite { solid, .. }) => assert!(!finite(&solids[*solid])),
-        Err(ComplexError::TooManyNonConvex { count, .. }) => assert_eq!(*count, non_convex),
         Err(e) => panic!("unexpected block error {e}"),
-        Ok(_) => assert!(!solids.is_empty() && solids.iter().all(finite) && non_convex < IntervalSet::CAPACITY),
+        Ok(b) => {
+            assert!(!solids.is_empty() && solids.iter().all(finite));
+            assert_eq!(b.fits_interval_set(), non_convex < IntervalSet::CAPACITY);
+        }
     }
     block.ok()
 }

@@ -58,12 +58,18 @@ pub struct Block {
     /// interval: [`Block::spans`] then keeps one [`ConvexSpan`] instead of
     /// interval sets.
     convex: bool,
+    /// At most `IntervalSet::CAPACITY - 1` non-convex solids: every ray's
+    /// set fits an [`IntervalSet`] (`m` non-convex solids give at most
+    /// `m + 1` intervals). Larger blocks take a heap buffer.
+    fits: bool,
     /// The kernel's precision mode (set by [`Complex::set_precision`](crate::Complex::set_precision)).
     precision: Precision,
 }
 
 /// A block's intervals along a ray: without an interval set (and the copies
-/// of its fixed-size buffer) when there is at most one.
+/// of its fixed-size buffer) when there is at most one, and in the heap
+/// buffer of the [`SpanBuf`] that holds it when there are more than an
+/// interval set can carry ([`Spans::Heap`]).
 // Boxing the set would allocate per ray; the big variant is the rare one.
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug)]
@@ -71,32 +77,88 @@ pub(crate) enum Spans {
     Empty,
     One(Interval),
     Many(IntervalSet),
+    /// In [`SpanBuf::heap`]: a block with more non-convex solids than an
+    /// interval set can carry ([`Block::fits_interval_set`]).
+    Heap,
 }
 
-impl Spans {
+/// Where a query writes one block's intervals at a time: a [`Spans`] and,
+/// for the large blocks only, a heap buffer, which the queries keep from
+/// block to block and hand back to a per-thread pool when done, so that a
+/// thread allocates it once, not per query. For the blocks that fit an
+/// interval set the buffer stays empty and costs nothing.
+#[derive(Debug)]
+pub(crate) struct SpanBuf {
+    pub(crate) spans: Spans,
+    heap: Vec<Interval>,
+}
+
+thread_local! {
+    /// The heap buffer of the last [`SpanBuf`] dropped on this thread.
+    static SPILLED: core::cell::Cell<Vec<Interval>> = const { core::cell::Cell::new(Vec::new()) };
+}
+
+impl SpanBuf {
+    #[inline(always)]
+    pub(crate) const fn new() -> Self {
+        SpanBuf { spans: Spans::Empty, heap: Vec::new() }
+    }
+
     /// The intervals, sorted.
     #[inline]
     pub(crate) fn as_slice(&self) -> &[Interval] {
-        match self {
+        match &self.spans {
             Spans::Empty => &[],
             Spans::One(iv) => core::slice::from_ref(iv),
             Spans::Many(set) => set.as_slice(),
+            Spans::Heap => &self.heap,
         }
     }
 
+    /// The intervals as a set, or `Err` past its capacity.
+    pub(crate) fn set(&self) -> Result<IntervalSet, quadric::CapacityError> {
+        match &self.spans {
+            Spans::Empty => Ok(IntervalSet::empty()),
+            Spans::One(iv) => Ok(IntervalSet::from_interval(iv.enter, iv.exit)),
+            Spans::Many(set) => Ok(*set),
+            Spans::Heap => IntervalSet::from_intervals(self.heap.iter().copied()),
+        }
+    }
+
+    /// The heap buffer, emptied, for a large block's intervals (taken from
+    /// the thread's pool the first time).
+    #[cold]
+    pub(crate) fn heap(&mut self) -> &mut Vec<Interval> {
+        if self.heap.capacity() == 0 {
+            self.heap = SPILLED.with(|c| c.take());
+        }
+        self.heap.clear();
+        &mut self.heap
+    }
+}
+
+impl SpanBuf {
+    /// The heap buffer as it is (a large block's intervals, [`Spans::Heap`]).
+    pub(crate) fn heap_mut(&mut self) -> &mut Vec<Interval> {
+        &mut self.heap
+    }
+}
+
+impl Drop for SpanBuf {
     #[inline]
-    pub(crate) fn set(&self) -> IntervalSet {
-        match self {
-            Spans::Empty => IntervalSet::empty(),
-            Spans::One(iv) => IntervalSet::from_interval(iv.enter, iv.exit),
-            Spans::Many(set) => *set,
+    fn drop(&mut self) {
+        if self.heap.capacity() != 0 {
+            let heap = core::mem::take(&mut self.heap);
+            // During a thread's teardown the pool may be gone: then it is freed.
+            let _ = SPILLED.try_with(|c| c.set(heap));
         }
     }
 }
 
 impl Block {
-    /// A block; errors if it has no solids, a solid is not finite, or it has
-    /// more non-convex solids than an interval set can carry.
+    /// A block; errors if it has no solids or a solid is not finite. Any
+    /// number of solids, convex or not, is allowed (see
+    /// [`Block::fits_interval_set`]).
     pub fn new(
         name: impl Into<String>,
         solids: Vec<Solid>,
@@ -117,10 +179,15 @@ impl Block {
             }
         }
         let non_convex = solids.iter().filter(|s| s.max_intervals() > 1).count();
-        if non_convex >= IntervalSet::CAPACITY {
-            return Err(ComplexError::TooManyNonConvex { name, count: non_convex, max: IntervalSet::CAPACITY - 1 });
-        }
-        Ok(Block { name, solids, opacity, material, convex: non_convex == 0, precision: Precision::default() })
+        Ok(Block {
+            name,
+            solids,
+            opacity,
+            material,
+            convex: non_convex == 0,
+            fits: non_convex < IntervalSet::CAPACITY,
+            precision: Precision::default(),
+        })
     }
 
     /// The block's name.
@@ -156,13 +223,62 @@ impl Block {
     /// The set of `λ >= 0` inside the block: the intersection of its solids'
     /// sets, each end tagged with the index of the solid it lies on. Stops as
     /// soon as the running set is empty (the convex loop of docs/model.md §3.1).
+    ///
+    /// # Panics
+    /// If the set has more than [`IntervalSet::CAPACITY`] intervals, which
+    /// only a block with more non-convex solids than that can give (see
+    /// [`Block::fits_interval_set`]); [`Block::intervals_into`] takes any block.
     pub fn intervals(&self, ray: &Ray) -> IntervalSet {
-        self.spans(ray).set()
+        match self.spans(ray).set() {
+            Ok(set) => set,
+            Err(e) => panic!("block \"{}\": {e}; use Block::intervals_into", self.name),
+        }
+    }
+
+    /// The intervals of [`Block::intervals`], sorted, written into `out`
+    /// (cleared first): for a block of any size, allocating only if `out`
+    /// must grow.
+    ///
+    /// ```
+    /// use complex::{Block, MaterialKey, Opacity};
+    /// use quadric::nalgebra::{Point3, Vector3};
+    /// use quadric::{HalfSpace, Quadric, Ray, Solid, Transform};
+    /// // A plate (|y| <= 1) drilled by twelve holes of radius 0.25 along y, at x = 0, 1, ..., 11.
+    /// let mut solids = vec![
+    ///     Solid::from(HalfSpace::new(0.0, 1.0, 0.0, -1.0).unwrap()),
+    ///     Solid::from(HalfSpace::new(0.0, -1.0, 0.0, -1.0).unwrap()),
+    /// ];
+    /// for k in 0..12 {
+    ///     let thin = Transform::scale_xyz(Vector3::new(0.25, 1.0, 0.25)).unwrap();
+    ///     let m = thin.then(&Transform::translate(Vector3::new(k as f64, 0.0, 0.0)).unwrap());
+    ///     solids.push(Solid::from(Quadric::tube_y().transformed(&m)).complement());
+    /// }
+    /// let plate = Block::new("plate", solids, Opacity::Opaque, MaterialKey(0)).unwrap();
+    /// assert!(!plate.fits_interval_set());
+    /// // Along the x axis the ray leaves and re-enters the plate at every hole.
+    /// let ray = Ray::new(Point3::new(-1.0, 0.0, 0.0), Vector3::x()).unwrap();
+    /// let mut out = Vec::new();
+    /// plate.intervals_into(&ray, &mut out);
+    /// assert_eq!(out.len(), 13);
+    /// assert_eq!((out[0].enter.t, out[0].exit.t), (0.0, 0.75));
+    /// ```
+    pub fn intervals_into(&self, ray: &Ray, out: &mut Vec<Interval>) {
+        out.clear();
+        out.extend_from_slice(self.spans(ray).as_slice());
+    }
+
+    /// Whether every ray's set fits an [`IntervalSet`], so that
+    /// [`Block::intervals`] cannot panic: true for a block with at most
+    /// `IntervalSet::CAPACITY - 1` non-convex solids (`m` of them give at
+    /// most `m + 1` intervals). Larger blocks are allowed; the queries keep
+    /// their sets in a heap buffer.
+    pub fn fits_interval_set(&self) -> bool {
+        self.fits
     }
 
     /// [`Block::intervals`] without building a set for a convex block.
-    pub(crate) fn spans(&self, ray: &Ray) -> Spans {
-        let mut spans = Spans::Empty;
+    pub(crate) fn spans(&self, ray: &Ray) -> SpanBuf {
+        let mut spans = SpanBuf::new();
         self.spans_into(ray, &mut spans);
         spans
     }
@@ -172,22 +288,28 @@ impl Block {
     /// enum instead costs a copy of its full 272 bytes wherever it is
     /// passed on, whatever the variant.)
     #[inline(always)]
-    pub(crate) fn spans_into(&self, ray: &Ray, out: &mut Spans) {
+    pub(crate) fn spans_into(&self, ray: &Ray, out: &mut SpanBuf) {
         if self.convex {
             let solids = self.solids.iter().map(SolidRef::from);
             if let Some(spans) = convex_spans(ray, solids, self.precision) {
-                *out = spans;
+                out.spans = spans;
                 return;
             }
         }
         self.spans_general_into(ray, out);
     }
 
-    /// `*out = self.spans_general(ray)`, out of line: the rare case.
+    /// `out.spans = self.spans_general(ray)`, out of line: the rare case;
+    /// a block too large for an interval set writes into `out`'s heap buffer.
     #[cold]
     #[inline(never)]
-    pub(crate) fn spans_general_into(&self, ray: &Ray, out: &mut Spans) {
-        *out = self.spans_general(ray);
+    pub(crate) fn spans_general_into(&self, ray: &Ray, out: &mut SpanBuf) {
+        if self.fits {
+            out.spans = self.spans_general(ray);
+        } else {
+            self.spans_large(ray, out.heap());
+            out.spans = Spans::Heap;
+        }
     }
 
     /// The precision mode its sets are computed in.
@@ -230,6 +352,33 @@ impl Block {
         }
         Spans::Many(acc)
     }
+
+    /// [`Block::spans_general`] for a block too large for an interval set:
+    /// the same intersection, solid by solid in block order with the same
+    /// comparisons (on equal `t` the running set's end is kept), into `acc`
+    /// (empty on entry), a buffer that grows as needed. In
+    /// [`Precision::Certified`] each solid's set is first settled against
+    /// the running set as [`Block::certified_set`] does.
+    fn spans_large(&self, ray: &Ray, acc: &mut Vec<Interval>) {
+        acc.push(Interval::new(Bound::free(0.0), Bound::free(f64::INFINITY)));
+        for (i, s) in self.solids.iter().enumerate() {
+            let i = i as u32;
+            let set: IntervalSet = match s {
+                _ if self.precision == Precision::Certified => {
+                    settle_ties(ray, &self.solids, i as usize, &s.intervals_certified(ray, i), acc)
+                }
+                Solid::HalfSpace(h) => {
+                    let (enter, exit) = h.interval_with(ray, i, self.precision);
+                    IntervalSet::from_interval(enter, exit)
+                }
+                Solid::Quadric(q) => q.pieces_with(ray, i, self.precision).into(),
+            };
+            intersect_in_place(acc, set.as_slice());
+            if acc.is_empty() {
+                break;
+            }
+        }
+    }
 }
 
 impl Block {
@@ -247,7 +396,7 @@ impl Block {
         let mut acc = IntervalSet::everything().clip(0.0, f64::INFINITY);
         for (i, s) in self.solids.iter().enumerate() {
             let own = s.intervals_certified(ray, i as u32);
-            let set = settle_ties(ray, &self.solids, i, &own, &acc);
+            let set = settle_ties(ray, &self.solids, i, &own, acc.as_slice());
             // Within capacity: checked in `Block::new`.
             acc = acc.intersect(&set).unwrap_or_default();
             if acc.is_empty() {
@@ -256,6 +405,37 @@ impl Block {
         }
         acc
     }
+}
+
+/// `acc ∩ other` into `acc`, as `IntervalSet::intersect` forms it (where two
+/// ends coincide the end of `acc` is kept; touching results merge), for a
+/// running set of any length: the result is appended after `acc`'s
+/// intervals, which are then dropped.
+fn intersect_in_place(acc: &mut Vec<Interval>, other: &[Interval]) {
+    let n = acc.len();
+    let (mut i, mut j) = (0, 0);
+    while i < n && j < other.len() {
+        let (x, y) = (acc[i], other[j]);
+        let enter = if y.enter.t > x.enter.t { y.enter } else { x.enter };
+        let exit = if y.exit.t < x.exit.t { y.exit } else { x.exit };
+        // Empty, inverted or NaN intervals are dropped, as by `IntervalSet`.
+        if enter.t.partial_cmp(&exit.t) == Some(core::cmp::Ordering::Less) {
+            match acc[n..].last_mut() {
+                Some(last) if enter.t <= last.exit.t => {
+                    if exit.t > last.exit.t {
+                        last.exit = exit;
+                    }
+                }
+                _ => acc.push(Interval::new(enter, exit)),
+            }
+        }
+        if x.exit.t <= y.exit.t {
+            i += 1;
+        } else {
+            j += 1;
+        }
+    }
+    acc.drain(..n);
 }
 
 /// The root of `certified` nearest to `t`, as (index, bound of `t`'s
@@ -274,7 +454,7 @@ fn settle_ties(
     solids: &[Solid],
     i: usize,
     own: &quadric::CertifiedIntervals,
-    acc: &IntervalSet,
+    acc: &[Interval],
 ) -> IntervalSet {
     let near = |a: f64, b: f64, bound: f64| (a - b).abs() <= bound;
     let mut out = [Interval::new(Bound::free(0.0), Bound::free(0.0)); IntervalSet::CAPACITY];
@@ -323,6 +503,31 @@ fn rebuilt(intervals: &[Interval], fallback: IntervalSet) -> IntervalSet {
     acc
 }
 
+/// [`rebuilt`] for a list of any length: the same set where it fits an
+/// interval set; past that (a large block's) `intervals` sorted by entry
+/// (ties in input order) and merged where they overlap or touch, the earlier
+/// end kept on ties, as `IntervalSet::from_intervals` merges.
+fn rebuilt_list(intervals: &[Interval], fallback: &[Interval]) -> Vec<Interval> {
+    if intervals.len() <= IntervalSet::CAPACITY && fallback.len() <= IntervalSet::CAPACITY {
+        let fallback = IntervalSet::from_intervals(fallback.iter().copied()).unwrap_or_default();
+        return rebuilt(intervals, fallback).as_slice().to_vec();
+    }
+    let mut sorted: Vec<Interval> = intervals.iter().copied().filter(|iv| iv.enter.t < iv.exit.t).collect();
+    sorted.sort_by(|x, y| x.enter.t.total_cmp(&y.enter.t));
+    let mut out: Vec<Interval> = Vec::with_capacity(sorted.len());
+    for iv in sorted {
+        match out.last_mut() {
+            Some(last) if iv.enter.t <= last.exit.t => {
+                if iv.exit.t > last.exit.t {
+                    last.exit = iv.exit;
+                }
+            }
+            _ => out.push(iv),
+        }
+    }
+    out
+}
+
 /// A relative distance within which two ends may be a tie their certified
 /// bounds cannot order: each bound is at most 2⁻²⁰ of its root (else the
 /// root was settled exactly, to an ulp), so two ends farther apart than
@@ -341,7 +546,7 @@ pub(crate) const NEAR_TIE: f64 = 4e-6;
 /// end moved. A cold path: the caller enters it only when two ends lie
 /// within [`NEAR_TIE`] of each other.
 #[cold]
-pub(crate) fn settle_block_ties(ray: &Ray, blocks: &[Block], sets: &mut [(crate::BlockId, IntervalSet)]) -> bool {
+pub(crate) fn settle_block_ties(ray: &Ray, blocks: &[Block], sets: &mut [(crate::BlockId, Vec<Interval>)]) -> bool {
     let near = |a: f64, b: f64, bound: f64| (a - b).abs() <= bound;
     // The solid an end lies on and the index and bound of its root.
     let root_of = |block: &Block, end: &Bound| -> Option<(Solid, usize, f64)> {
@@ -355,11 +560,9 @@ pub(crate) fn settle_block_ties(ray: &Ray, blocks: &[Block], sets: &mut [(crate:
         let (earlier, rest) = sets.split_at_mut(later);
         let (id, set) = &mut rest[0];
         let Some(block) = blocks.get(id.index()) else { continue };
-        let mut out = [Interval::new(Bound::free(0.0), Bound::free(0.0)); IntervalSet::CAPACITY];
-        let n = set.len();
-        out[..n].copy_from_slice(set.as_slice());
+        let mut out = set.clone();
         let mut moved = false;
-        for iv in out[..n].iter_mut() {
+        for iv in out.iter_mut() {
             for end in [&mut iv.enter, &mut iv.exit] {
                 // Found only when a near end is met (the root is recomputed).
                 let mut own = None;
@@ -389,7 +592,7 @@ pub(crate) fn settle_block_ties(ray: &Ray, blocks: &[Block], sets: &mut [(crate:
         if moved {
             // Moved by ulps: rebuilt (an interval closed by the move is
             // dropped, two that now touch are merged).
-            *set = rebuilt(&out[..n], *set);
+            *set = rebuilt_list(&out, set);
             moved_any = true;
         }
     }

@@ -3,11 +3,11 @@
 use quadric::nalgebra::{Point3, Vector3};
 use quadric::{Bound, Interval, IntervalSet, Ray};
 
-use crate::block::{SolidRef, Spans};
+use crate::block::{SolidRef, SpanBuf, Spans};
 use crate::bounds::block_boxes;
 use crate::bvh::{Bvh, RayBoxes, RayBoxes4};
 use crate::kernel::Kernel;
-use crate::partition::{BlockSpans, Event};
+use crate::partition::{BlockIntervals, BlockSpans, Event};
 use crate::point_grid::PointGrid;
 use crate::{Aabb, Block, BlockId, ComplexError};
 
@@ -231,13 +231,35 @@ impl Complex {
     /// half-space whose reference point is far away); an end moved by the
     /// clip lies on the box and is tagged with a solid the ray is outside
     /// of there (see `docs/complex.md`, "One set per block and ray").
+    ///
+    /// # Panics
+    /// If the set has more than [`IntervalSet::CAPACITY`] intervals, which
+    /// only a block with more non-convex solids than that can give (see
+    /// [`Block::fits_interval_set`]); [`Complex::block_intervals_into`]
+    /// takes any block.
     pub fn block_intervals(&self, id: BlockId, ray: &Ray) -> IntervalSet {
-        if self.boxes[id.index()].is_empty() {
-            return IntervalSet::empty();
+        let mut scratch = SpanBuf::new();
+        self.block_intervals_in(id, ray, &mut scratch);
+        match scratch.set() {
+            Ok(set) => set,
+            Err(e) => panic!("block \"{}\": {e}; use Complex::block_intervals_into", self.blocks[id.index()].name()),
         }
-        let mut scratch = Spans::Empty;
-        self.block_spans(id.0, ray, &RayBoxes::new(ray), &mut scratch);
-        scratch.set()
+    }
+
+    /// The intervals of [`Complex::block_intervals`], sorted, written into
+    /// `out` (cleared first): for a block of any size, allocating only if
+    /// `out` must grow.
+    pub fn block_intervals_into(&self, id: BlockId, ray: &Ray, out: &mut Vec<Interval>) {
+        let mut scratch = SpanBuf::new();
+        self.block_intervals_in(id, ray, &mut scratch);
+        out.clear();
+        out.extend_from_slice(scratch.as_slice());
+    }
+
+    fn block_intervals_in(&self, id: BlockId, ray: &Ray, scratch: &mut SpanBuf) {
+        if !self.boxes[id.index()].is_empty() {
+            self.block_spans(id.0, ray, &RayBoxes::new(ray), scratch);
+        }
     }
 
     /// The intervals of the block in BVH slot `k`, clipped to its box: the
@@ -246,7 +268,7 @@ impl Complex {
     /// block) and read from there: a [`Spans`] value passed on by value is a
     /// 272-byte copy, whatever its variant.
     #[inline(always)]
-    fn slot_spans<'s>(&self, k: u32, ray: &Ray, rb: &RayBoxes, scratch: &'s mut Spans) -> &'s [Interval] {
+    fn slot_spans<'s>(&self, k: u32, ray: &Ray, rb: &RayBoxes, scratch: &'s mut SpanBuf) -> &'s [Interval] {
         self.kernel.spans_into(k, ray, &self.blocks, scratch);
         self.clip_to_box(self.kernel.block(k), scratch, ray, rb);
         scratch.as_slice()
@@ -255,7 +277,7 @@ impl Complex {
     /// The intervals of block `i`, clipped to its box (for unbounded
     /// blocks), like [`Complex::slot_spans`].
     #[inline]
-    fn block_spans<'s>(&self, i: u32, ray: &Ray, rb: &RayBoxes, scratch: &'s mut Spans) -> &'s [Interval] {
+    fn block_spans<'s>(&self, i: u32, ray: &Ray, rb: &RayBoxes, scratch: &'s mut SpanBuf) -> &'s [Interval] {
         self.blocks[i as usize].spans_into(ray, scratch);
         self.clip_to_box(i, scratch, ray, rb);
         scratch.as_slice()
@@ -267,7 +289,7 @@ impl Complex {
     /// partition and `cast_ray` see the same spans. The common case (nothing outside) is two
     /// comparisons after the slab test.
     #[inline(always)]
-    fn clip_to_box(&self, i: u32, spans: &mut Spans, ray: &Ray, rb: &RayBoxes) {
+    fn clip_to_box(&self, i: u32, spans: &mut SpanBuf, ray: &Ray, rb: &RayBoxes) {
         let s = spans.as_slice();
         let (Some(first), Some(last)) = (s.first(), s.last()) else { return };
         let b = &self.boxes[i as usize];
@@ -284,24 +306,40 @@ impl Complex {
     /// there (the box face is near that solid's surface), else solid 0.
     #[cold]
     #[inline(never)]
-    fn clip_spans(&self, i: u32, spans: &mut Spans, lo: f64, hi: f64, ray: &Ray) {
+    fn clip_spans(&self, i: u32, spans: &mut SpanBuf, lo: f64, hi: f64, ray: &Ray) {
         let solids = self.blocks[i as usize].solids();
         let tag = |b: Bound, t: f64| {
             let x = ray.at(t);
             let solid = b.solid().or_else(|| solids.iter().position(|s| s.value(&x) > 0.0).map(|k| k as u32));
             Bound::new(t, solid.unwrap_or(0))
         };
+        let clip = |iv: &Interval| {
+            let enter = if iv.enter.t < lo { tag(iv.enter, lo) } else { iv.enter };
+            let exit = if iv.exit.t > hi { tag(iv.exit, hi) } else { iv.exit };
+            (enter.t < exit.t).then_some(Interval::new(enter, exit))
+        };
+        if let Spans::Heap = spans.spans {
+            // A large block's intervals, clipped in place.
+            let heap = spans.heap_mut();
+            let mut n = 0;
+            for k in 0..heap.len() {
+                if let Some(iv) = clip(&heap[k]) {
+                    heap[n] = iv;
+                    n += 1;
+                }
+            }
+            heap.truncate(n);
+            return;
+        }
         let mut out = [Interval::new(Bound::free(0.0), Bound::free(0.0)); IntervalSet::CAPACITY];
         let mut n = 0;
         for iv in spans.as_slice() {
-            let enter = if iv.enter.t < lo { tag(iv.enter, lo) } else { iv.enter };
-            let exit = if iv.exit.t > hi { tag(iv.exit, hi) } else { iv.exit };
-            if enter.t < exit.t {
-                out[n] = Interval::new(enter, exit);
+            if let Some(iv) = clip(iv) {
+                out[n] = iv;
                 n += 1;
             }
         }
-        *spans = match &out[..n] {
+        spans.spans = match &out[..n] {
             [] => Spans::Empty,
             [iv] => Spans::One(*iv),
             // At most as many intervals as the block had: within capacity.
@@ -310,11 +348,33 @@ impl Complex {
     }
 
     /// The interval set of each block the ray meets, with intervals inside
-    /// `[0, ε]` removed, in priority order.
+    /// `[0, ε]` removed, in priority order. A vector per call:
+    /// [`Complex::intervals_into`] gives the same intervals into a reusable
+    /// [`BlockIntervals`], for blocks of any size.
+    ///
+    /// # Panics
+    /// If a block's set has more than [`IntervalSet::CAPACITY`] intervals,
+    /// which only a block with more non-convex solids than that can give
+    /// (see [`Block::fits_interval_set`]).
     pub fn intervals(&self, ray: &Ray) -> Vec<(BlockId, IntervalSet)> {
         let mut out = BlockSpans::default();
         self.collect_spans(ray, f64::INFINITY, &mut out);
-        out.to_vec()
+        match out.to_vec() {
+            Ok(sets) => sets,
+            Err(id) => panic!(
+                "block \"{}\": {}; use Complex::intervals_into",
+                self.blocks[id.index()].name(),
+                quadric::CapacityError
+            ),
+        }
+    }
+
+    /// [`Complex::intervals`] written into `out` (cleared first): each
+    /// block the ray meets with its intervals after the ε rule, in priority
+    /// order. Allocates only while `out` grows (and once per thread for a
+    /// block too large for an interval set).
+    pub fn intervals_into(&self, ray: &Ray, out: &mut BlockIntervals) {
+        self.collect_spans(ray, f64::INFINITY, out.spans_mut());
     }
 
     /// The non-empty spans (after the ε rule) of the blocks whose boxes the ray
@@ -334,7 +394,7 @@ impl Complex {
         let rb = RayBoxes::new(ray);
         let from = if max_t < eps { max_t } else { eps };
         let mut t_max = max_t;
-        let mut scratch = Spans::Empty;
+        let mut scratch = SpanBuf::new();
         self.bvh.traverse_any(&rb, from, &mut t_max, |k, _, _| {
             push(self.kernel.block(k), self.slot_spans(k, ray, &rb, &mut scratch))
         });
@@ -372,7 +432,7 @@ impl Complex {
         let known = |i: u32| previous.and_then(|p| p.get(BlockId(i)));
         let rb = RayBoxes::new(ray);
         let mut t_max = f64::INFINITY;
-        let mut scratch = Spans::Empty;
+        let mut scratch = SpanBuf::new();
         for i in self.unbounded_crossed(&rb, 0.0, f64::INFINITY) {
             match known(i) {
                 Some(ivs) => push(i, ivs, &mut t_max),
@@ -509,7 +569,7 @@ impl Complex {
             enters
         };
         let mut t_max = max_t;
-        let mut scratch = Spans::Empty;
+        let mut scratch = SpanBuf::new();
         // The block that stopped the previous ray: if it stops this one
         // too, the walk below is the inside-probe only. (Looking at a block
         // twice changes nothing: `look` only raises `run_end` and sets
@@ -568,7 +628,7 @@ impl Complex {
             }
         };
         let mut t_hi = t;
-        let mut scratch = Spans::Empty;
+        let mut scratch = SpanBuf::new();
         self.bvh.traverse_any(rb, t, &mut t_hi, |k, _, _| {
             consider(self.kernel.block(k), self.slot_spans(k, ray, rb, &mut scratch))
         });
@@ -592,7 +652,7 @@ impl Complex {
             }
         };
         let mut t_max = max_t;
-        let mut scratch = Spans::Empty;
+        let mut scratch = SpanBuf::new();
         for i in self.unbounded_crossed(rb, tau, max_t) {
             consider(self.block_spans(i, ray, rb, &mut scratch), &mut t_max);
         }
@@ -624,14 +684,14 @@ impl Complex {
         after: Option<BlockId>,
     ) -> Option<Hit> {
         let entry = after.and_then(|id| {
-            let mut scratch = Spans::Empty;
+            let mut scratch = SpanBuf::new();
             let spans = self.block_spans(id.0, ray, rb, &mut scratch);
             let solid = spans.iter().find(|iv| iv.enter.t == t)?.enter.solid()?;
             Some(self.hit(ray, t, id.0, solid, true))
         });
         entry.or_else(|| {
             let id = before?;
-            let mut scratch = Spans::Empty;
+            let mut scratch = SpanBuf::new();
             let spans = self.block_spans(id.0, ray, rb, &mut scratch);
             let solid = spans.iter().find(|iv| iv.exit.t == t)?.exit.solid()?;
             Some(self.hit(ray, t, id.0, solid, false))
@@ -650,7 +710,7 @@ impl Complex {
         // so the shrinking `t_max` never cuts them off.
         let mut nearest = Nearest::new(eps);
         let mut t_max = max_t;
-        let mut scratch = Spans::Empty;
+        let mut scratch = SpanBuf::new();
         for i in self.unbounded_crossed(&rb, eps, max_t) {
             nearest.consider(i, None, self.block_spans(i, ray, &rb, &mut scratch), &mut t_max);
         }
@@ -672,7 +732,7 @@ impl Complex {
         let rbs = rays.each_ref().map(RayBoxes::new);
         let mut nearest = [Nearest::new(eps); 4];
         let mut t_max = [max_t; 4];
-        let mut scratch = Spans::Empty;
+        let mut scratch = SpanBuf::new();
         for (lane, ray) in rays.iter().enumerate() {
             for i in self.unbounded_crossed(&rbs[lane], eps, max_t) {
                 let spans = self.block_spans(i, ray, &rbs[lane], &mut scratch);
@@ -730,7 +790,7 @@ impl Complex {
                 }
             };
             let mut t_hi = run_end;
-            let mut scratch = Spans::Empty;
+            let mut scratch = SpanBuf::new();
             self.bvh.traverse_any(rb, self.epsilon, &mut t_hi, |k, _, _| {
                 extend(self.kernel.block(k), self.slot_spans(k, ray, rb, &mut scratch))
             });

@@ -17,16 +17,6 @@ pub enum ComplexError {
         /// Index of the solid in the block (0-based).
         solid: usize,
     },
-    /// More non-convex solids than an interval set can carry.
-    #[error("block \"{name}\" has {count} non-convex solids; at most {max} are supported")]
-    TooManyNonConvex {
-        /// The block's name.
-        name: String,
-        /// How many it has.
-        count: usize,
-        /// The limit.
-        max: usize,
-    },
     /// An ε that is negative or not finite.
     #[error("epsilon must be finite and >= 0, got {0}")]
     BadEpsilon(f64),

@@ -14,7 +14,7 @@
 
 use quadric::{HalfSpace, Precision, Quadric, Ray, Rebased, Solid};
 
-use crate::block::{ConvexSpan, SolidRef, Spans};
+use crate::block::{ConvexSpan, SolidRef, SpanBuf, Spans};
 use crate::bounds::Ball;
 use crate::Block;
 
@@ -253,13 +253,13 @@ impl Kernel {
     /// in place, like [`Block::spans_into`]: a convex block writes at most
     /// one interval, not a 272-byte enum.)
     #[inline(always)]
-    pub(crate) fn spans_into(&self, k: u32, ray: &Ray, blocks: &[Block], out: &mut Spans) {
+    pub(crate) fn spans_into(&self, k: u32, ray: &Ray, blocks: &[Block], out: &mut SpanBuf) {
         let slot = &self.slots[k as usize];
         if slot.count > 0 {
             let spans = match self.precision {
                 Precision::Accurate => {
                     if slot.ball.radius < f64::INFINITY && slot.ball.missed_by(ray) {
-                        *out = Spans::Empty;
+                        out.spans = Spans::Empty;
                         return;
                     }
                     self.packed_spans::<false>(slot, ray)
@@ -269,7 +269,7 @@ impl Kernel {
                 _ => None,
             };
             if let Some(spans) = spans {
-                *out = spans;
+                out.spans = spans;
                 return;
             }
         }
@@ -469,7 +469,7 @@ mod tests {
         n.iter().chain(o.iter()).chain(v.iter()).map(|x| x.to_bits()).collect()
     }
 
-    fn span_bits(s: &Spans) -> Vec<(u64, Option<u32>, u64, Option<u32>)> {
+    fn span_bits(s: &SpanBuf) -> Vec<(u64, Option<u32>, u64, Option<u32>)> {
         s.as_slice()
             .iter()
             .map(|iv| (iv.enter.t.to_bits(), iv.enter.solid(), iv.exit.t.to_bits(), iv.exit.solid()))
@@ -549,7 +549,7 @@ mod tests {
                 let Some(across) = dir.cross(&radial).try_normalize(1e-9) else { continue };
                 let aim = c + radial * (1.0 - inside);
                 let Ok(ray) = Ray::new(aim - across * (back * radial.norm()), across) else { continue };
-                let mut packed = Spans::Empty;
+                let mut packed = SpanBuf::new();
                 kernel.spans_into(0, &ray, std::slice::from_ref(&block), &mut packed);
                 let plain = block.spans(&ray);
                 prop_assert_eq!(packed.as_slice(), plain.as_slice(), "inside by {}", inside);
@@ -615,7 +615,7 @@ mod tests {
                 let rho = ball.radius * (1.0 + off) / (1.0 + 1e-6);
                 let foot = Point3::from(ball.centre) + side * rho + r * (along * size);
                 let Ok(ray) = Ray::new(foot - r * (back * size), r) else { continue };
-                let mut packed = Spans::Empty;
+                let mut packed = SpanBuf::new();
                 kernel.spans_into(0, &ray, std::slice::from_ref(&block), &mut packed);
                 let plain = block.spans(&ray);
                 prop_assert_eq!(packed.as_slice(), plain.as_slice(), "off {}", off);
@@ -661,7 +661,7 @@ mod tests {
                     for k in 0..order.len() as u32 {
                         let id = kernel.block(k);
                         prop_assert_eq!(id, order[k as usize]);
-                        let mut packed = Spans::Empty;
+                        let mut packed = SpanBuf::new();
                         kernel.spans_into(k, ray, &blocks, &mut packed);
                         let plain = blocks[id as usize].spans(ray);
                         prop_assert_eq!(span_bits(&packed), span_bits(&plain), "{:?} slot {} ray {:?}", precision, k, ray);

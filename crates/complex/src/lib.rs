@@ -27,7 +27,7 @@ pub use block::{Block, BlockId, MaterialKey, Opacity};
 pub use bounds::Aabb;
 pub use complex::{Complex, ComplexOptions, Hit, Occluder, DEFAULT_RELATIVE_EPSILON};
 pub use error::ComplexError;
-pub use partition::{Event, Partition, Segment, Surface};
+pub use partition::{BlockIntervals, Event, Partition, Segment, Surface};
 /// The kernel's precision modes: `quadric`'s type, re-exported (one type, documented there).
 #[doc(no_inline)]
 pub use quadric::Precision;

@@ -130,12 +130,12 @@ impl BlockSpans {
         self.blocks.sort_unstable_by_key(|b| b.0);
     }
 
-    fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.blocks.len()
     }
 
     /// Each block's spans, in priority order.
-    fn iter(&self) -> impl Iterator<Item = (BlockId, &[Interval])> + '_ {
+    pub(crate) fn iter(&self) -> impl Iterator<Item = (BlockId, &[Interval])> + '_ {
         self.blocks.iter().map(|&(id, first, n)| (id, &self.intervals[first as usize..(first + n) as usize]))
     }
 
@@ -154,20 +154,91 @@ impl BlockSpans {
         Some(&self.intervals[first as usize..(first + n) as usize])
     }
 
-    /// As a vector of interval sets (the public form, and the Certified
-    /// tie settlement's).
-    pub(crate) fn to_vec(&self) -> Vec<(BlockId, IntervalSet)> {
+    /// As a vector of interval sets (the public form of
+    /// [`Complex::intervals`]), or `Err` naming a block whose set is past
+    /// an interval set's capacity.
+    pub(crate) fn to_vec(&self) -> Result<Vec<(BlockId, IntervalSet)>, BlockId> {
         self.iter()
-            .map(|(id, ivs)| (id, IntervalSet::from_intervals(ivs.iter().copied()).unwrap_or_default()))
+            .map(|(id, ivs)| Ok((id, IntervalSet::from_intervals(ivs.iter().copied()).map_err(|_| id)?)))
             .collect()
     }
 
-    /// Replaces the spans by the interval sets `sets` (sorted by block).
-    fn assign(&mut self, sets: &[(BlockId, IntervalSet)]) {
+    /// As lists (the Certified tie settlement's form).
+    fn to_lists(&self) -> Vec<(BlockId, Vec<Interval>)> {
+        self.iter().map(|(id, ivs)| (id, ivs.to_vec())).collect()
+    }
+
+    /// Replaces the spans by the lists `sets` (sorted by block).
+    fn assign(&mut self, sets: &[(BlockId, Vec<Interval>)]) {
         self.clear();
         for (id, set) in sets {
-            self.push(*id, set.as_slice(), f64::NEG_INFINITY, false);
+            self.push(*id, set, f64::NEG_INFINITY, false);
         }
+    }
+}
+
+/// Every block's intervals along one ray, as [`Complex::intervals_into`]
+/// writes them: reusable, so that after the first rays it allocates
+/// nothing, and for blocks of any size (a block's intervals are a slice,
+/// not an [`IntervalSet`] of fixed capacity).
+///
+/// ```
+/// use complex::{Block, BlockId, BlockIntervals, Complex, ComplexOptions, MaterialKey, Opacity};
+/// use quadric::nalgebra::{Point3, Vector3};
+/// use quadric::{Quadric, Ray, Solid};
+/// let ball = Block::new("ball", vec![Solid::from(Quadric::sphere())], Opacity::Opaque, MaterialKey(0)).unwrap();
+/// let scene = Complex::new(vec![ball], ComplexOptions::default()).unwrap();
+/// let mut out = BlockIntervals::new();
+/// for y in [0.0, 0.5, 2.0] {
+///     let ray = Ray::new(Point3::new(0.0, y, -5.0), Vector3::z()).unwrap();
+///     scene.intervals_into(&ray, &mut out);
+///     let blocks: Vec<BlockId> = out.iter().map(|(id, _)| id).collect();
+///     assert_eq!(blocks.len(), usize::from(y < 1.0));
+///     if let Some(ivs) = out.get(BlockId(0)) {
+///         assert_eq!(ivs.len(), 1);
+///         assert!(ivs[0].enter.t > 3.9 && ivs[0].exit.t < 6.1);
+///     }
+/// }
+/// ```
+#[derive(Debug, Default)]
+pub struct BlockIntervals {
+    spans: BlockSpans,
+}
+
+impl BlockIntervals {
+    /// An empty list.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Each block the ray meets (after the ε rule) with its intervals,
+    /// sorted, in priority order.
+    pub fn iter(&self) -> impl Iterator<Item = (BlockId, &[Interval])> + '_ {
+        self.spans.iter()
+    }
+
+    /// Block `id`'s intervals, if the ray meets it.
+    pub fn get(&self, id: BlockId) -> Option<&[Interval]> {
+        self.spans.get(id)
+    }
+
+    /// How many blocks the ray meets.
+    pub fn len(&self) -> usize {
+        self.spans.len()
+    }
+
+    /// Whether the ray meets no block.
+    pub fn is_empty(&self) -> bool {
+        self.spans.len() == 0
+    }
+
+    /// Empties the list, keeping its allocations.
+    pub fn clear(&mut self) {
+        self.spans.clear();
+    }
+
+    pub(crate) fn spans_mut(&mut self) -> &mut BlockSpans {
+        &mut self.spans
     }
 }
 
@@ -382,7 +453,7 @@ impl Complex {
             && spans.len() > 1
             && cuts.windows(2).any(|w| w[1] - w[0] <= crate::block::NEAR_TIE * w[1].abs())
         {
-            let mut moved = spans.to_vec();
+            let mut moved = spans.to_lists();
             if crate::block::settle_block_ties(ray, self.blocks(), &mut moved) {
                 spans.assign(&moved);
                 gather(spans, cuts);

@@ -69,12 +69,13 @@ pub fn trace(world: &World, origin: [f64; 3], direction: [f64; 3]) -> Result<Tra
     let ray = Ray::new(Point3::from(Vector3::from(origin)), Vector3::from(direction))
         .map_err(|e| Error::Options(format!("--origin/--direction: {e}")))?;
     let complex = &world.complex;
+    let mut set = Vec::new();
     let blocks = complex
         .blocks()
         .iter()
         .enumerate()
         .map(|(i, b)| {
-            let set = complex.block_intervals(complex::BlockId(i as u32), &ray);
+            complex.block_intervals_into(complex::BlockId(i as u32), &ray, &mut set);
             BlockReport {
                 index: i as u32 + 1,
                 name: b.name().to_string(),
