@@ -718,3 +718,52 @@ fn settled(end: f64, other: f64, order: Option<core::cmp::Ordering>) -> Option<f
         _ => None,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use proptest::prelude::*;
+    use quadric::{strategies, Precision, Solid};
+
+    use super::*;
+
+    proptest! {
+        /// The large blocks' path (a growable buffer) and the interval
+        /// sets' path form the same intersection, bit for bit and tag for
+        /// tag, wherever both can: on blocks that fit a set, in every
+        /// precision mode.
+        #[test]
+        fn the_heap_path_forms_the_sets_intersection(
+            solids in proptest::collection::vec(strategies::solid(), 1..=7),
+            rays in proptest::collection::vec(strategies::ray(3.0), 8),
+        ) {
+            let mut block = Block::new("b", solids, Opacity::Opaque, MaterialKey(0)).expect("finite");
+            prop_assume!(block.fits);
+            for precision in [Precision::Accurate, Precision::Fast, Precision::Certified] {
+                block.set_precision(precision);
+                for ray in &rays {
+                    let set = block.spans_general(ray);
+                    let mut heap = Vec::new();
+                    block.spans_large(ray, &mut heap);
+                    let mut buf = SpanBuf::new();
+                    buf.spans = set;
+                    prop_assert_eq!(buf.as_slice(), &heap[..], "{:?} {:?}", precision, ray);
+                }
+            }
+        }
+    }
+
+    /// Seven non-convex solids fit a set (at most eight intervals), eight do not.
+    #[test]
+    fn eight_non_convex_solids_make_a_large_block() {
+        let hollow = |k: u32| {
+            Solid::from(quadric::Quadric::sphere())
+                .complement()
+                .transformed(&quadric::Transform::scale(0.1 * f64::from(k + 1)).expect("finite"))
+        };
+        let solids: Vec<Solid> = (0..8).map(hollow).collect();
+        let block = Block::new("b", solids[..7].to_vec(), Opacity::Opaque, MaterialKey(0)).expect("finite");
+        assert!(block.fits_interval_set());
+        let block = Block::new("b", solids, Opacity::Opaque, MaterialKey(0)).expect("finite");
+        assert!(!block.fits_interval_set());
+    }
+}

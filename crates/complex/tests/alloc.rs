@@ -110,3 +110,61 @@ fn batch_queries_do_not_allocate_per_query() {
         }
     }
 }
+
+/// A block with more non-convex solids than an interval set carries (a
+/// plate drilled by 100 holes) keeps its intervals in a heap buffer, taken
+/// from a per-thread pool: once the first query on a thread has made it,
+/// the queries allocate nothing more.
+#[test]
+fn large_blocks_allocate_once_per_thread() {
+    let mut solids = cuboid([-6.0, -1.0, -6.0], [6.0, 1.0, 6.0]);
+    for i in -5..5 {
+        for k in -5..5 {
+            let m = quadric::Transform::scale_xyz(quadric::nalgebra::Vector3::new(0.3, 1.0, 0.3))
+                .expect("finite")
+                .then(&translate(i as f64, 0.0, k as f64));
+            solids.push(Solid::from(Quadric::tube_y().transformed(&m)).complement());
+        }
+    }
+    let plate = Block::new("plate", solids, Opacity::Transparent, MaterialKey(1)).expect("valid");
+    let (c, mut rays) = scene(4);
+    // Rays along the plate, through its rows of holes.
+    rays.extend((0..200).map(|k| {
+        let (y, z, dz) = (-0.9 + 0.009 * k as f64, -5.5 + 0.055 * k as f64, 0.1 * ((k % 7) as f64 - 3.0));
+        Ray::new(quadric::nalgebra::Point3::new(-8.0, y, z), quadric::nalgebra::Vector3::new(1.0, 0.0, dz))
+            .expect("valid")
+    }));
+    let mut blocks = c.blocks().to_vec();
+    blocks.push(plate);
+    let c = Complex::new(blocks, ComplexOptions::default()).expect("valid");
+    let mut partition = complex::Partition::default();
+    let mut lists = complex::BlockIntervals::new();
+    // The case is what it says: the plate spills.
+    let plate = complex::BlockId(c.blocks().len() as u32 - 1);
+    let spilled = rays
+        .iter()
+        .filter(|r| {
+            c.intervals_into(r, &mut lists);
+            lists.get(plate).is_some_and(|ivs| ivs.len() > quadric::IntervalSet::CAPACITY)
+        })
+        .count();
+    assert!(spilled >= 10, "only {spilled} rays meet the plate in more intervals than a set carries");
+    let mut run = || {
+        let mut n = 0;
+        for r in &rays {
+            n += usize::from(c.cast_ray(r, f64::INFINITY).is_some());
+            n += usize::from(c.occluded(r, 8.0));
+            c.partition_into(r, &mut partition);
+            c.intervals_into(r, &mut lists);
+            n += lists.len();
+        }
+        n
+    };
+    // Warm-up: the buffers grow.
+    let n = run();
+    assert!(n > 100, "the scene should be hit often, got {n}");
+    let info = allocation_counter::measure(|| {
+        run();
+    });
+    assert_eq!(info.count_total, 0, "queries allocated after warm-up");
+}

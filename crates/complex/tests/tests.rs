@@ -7,6 +7,7 @@ mod common;
 mod furniture;
 mod fuzz_regressions;
 mod kernel;
+mod large;
 mod options;
 mod oracle;
 mod secondary;
