@@ -67,9 +67,7 @@ pub struct Block {
 }
 
 /// A block's intervals along a ray: without an interval set (and the copies
-/// of its fixed-size buffer) when there is at most one, and in the heap
-/// buffer of the [`SpanBuf`] that holds it when there are more than an
-/// interval set can carry ([`Spans::Heap`]).
+/// of its fixed-size buffer) when there is at most one.
 // Boxing the set would allocate per ray; the big variant is the rare one.
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug)]
@@ -77,19 +75,92 @@ pub(crate) enum Spans {
     Empty,
     One(Interval),
     Many(IntervalSet),
-    /// In [`SpanBuf::heap`]: a block with more non-convex solids than an
-    /// interval set can carry ([`Block::fits_interval_set`]).
-    Heap,
 }
 
-/// Where a query writes one block's intervals at a time: a [`Spans`] and,
-/// for the large blocks only, a heap buffer, which the queries keep from
-/// block to block and hand back to a per-thread pool when done, so that a
-/// thread allocates it once, not per query. For the blocks that fit an
-/// interval set the buffer stays empty and costs nothing.
+impl Spans {
+    /// The intervals, sorted.
+    #[inline]
+    pub(crate) fn as_slice(&self) -> &[Interval] {
+        match self {
+            Spans::Empty => &[],
+            Spans::One(iv) => core::slice::from_ref(iv),
+            Spans::Many(set) => set.as_slice(),
+        }
+    }
+}
+
+/// Where a query writes one block's intervals at a time, reused from block
+/// to block. Two kinds: a bare [`Spans`], for the complexes whose blocks
+/// all fit an interval set (every query on them is compiled for it, so the
+/// common case carries nothing for the rare one), and a [`SpanBuf`], which
+/// adds a heap buffer for the blocks that do not
+/// ([`Block::fits_interval_set`]).
+pub(crate) trait Scratch {
+    /// Whether it can hold a large block's intervals.
+    const LARGE: bool;
+    fn new() -> Self;
+    /// The intervals, sorted.
+    fn as_slice(&self) -> &[Interval];
+    /// Holds `spans` (a block that fits a set).
+    fn set_spans(&mut self, spans: Spans);
+    /// Holds the intervals `fill` writes into an empty buffer (a block too
+    /// large for a set).
+    fn set_large(&mut self, fill: impl FnOnce(&mut Vec<Interval>));
+    /// The buffer of a large block's intervals, if it holds one.
+    fn large_mut(&mut self) -> Option<&mut Vec<Interval>>;
+    /// The [`Spans`] to write a block that fits a set into.
+    fn spans_mut(&mut self) -> &mut Spans;
+}
+
+impl Scratch for Spans {
+    const LARGE: bool = false;
+
+    #[inline(always)]
+    fn new() -> Self {
+        Spans::Empty
+    }
+
+    #[inline(always)]
+    fn as_slice(&self) -> &[Interval] {
+        Spans::as_slice(self)
+    }
+
+    #[inline(always)]
+    fn set_spans(&mut self, spans: Spans) {
+        *self = spans;
+    }
+
+    /// Only for a complex that holds no large block: then the intervals fit.
+    #[cold]
+    fn set_large(&mut self, fill: impl FnOnce(&mut Vec<Interval>)) {
+        let mut v = Vec::new();
+        fill(&mut v);
+        match IntervalSet::from_intervals(v) {
+            Ok(set) => *self = Spans::Many(set),
+            Err(_) => unreachable!("a block too large for an interval set queried as a small one"),
+        }
+    }
+
+    #[inline(always)]
+    fn large_mut(&mut self) -> Option<&mut Vec<Interval>> {
+        None
+    }
+
+    #[inline(always)]
+    fn spans_mut(&mut self) -> &mut Spans {
+        self
+    }
+}
+
+/// A [`Spans`] and, for the blocks too large for an interval set, a heap
+/// buffer, which the queries keep from block to block and hand back to a
+/// per-thread pool when done, so that a thread allocates it once, not per
+/// query.
 #[derive(Debug)]
 pub(crate) struct SpanBuf {
-    pub(crate) spans: Spans,
+    spans: Spans,
+    /// Whether the intervals are in `heap` (else in `spans`).
+    on_heap: bool,
     heap: Vec<Interval>,
 }
 
@@ -99,53 +170,64 @@ thread_local! {
 }
 
 impl SpanBuf {
-    #[inline(always)]
-    pub(crate) const fn new() -> Self {
-        SpanBuf { spans: Spans::Empty, heap: Vec::new() }
-    }
-
-    /// The intervals, sorted.
-    #[inline]
-    pub(crate) fn as_slice(&self) -> &[Interval] {
-        match &self.spans {
-            Spans::Empty => &[],
-            Spans::One(iv) => core::slice::from_ref(iv),
-            Spans::Many(set) => set.as_slice(),
-            Spans::Heap => &self.heap,
-        }
-    }
-
     /// The intervals as a set, or `Err` past its capacity.
     pub(crate) fn set(&self) -> Result<IntervalSet, quadric::CapacityError> {
         match &self.spans {
+            _ if self.on_heap => IntervalSet::from_intervals(self.heap.iter().copied()),
             Spans::Empty => Ok(IntervalSet::empty()),
             Spans::One(iv) => Ok(IntervalSet::from_interval(iv.enter, iv.exit)),
             Spans::Many(set) => Ok(*set),
-            Spans::Heap => IntervalSet::from_intervals(self.heap.iter().copied()),
+        }
+    }
+}
+
+impl Scratch for SpanBuf {
+    const LARGE: bool = true;
+
+    #[inline(always)]
+    fn new() -> Self {
+        SpanBuf { spans: Spans::Empty, on_heap: false, heap: Vec::new() }
+    }
+
+    #[inline]
+    fn as_slice(&self) -> &[Interval] {
+        if self.on_heap {
+            &self.heap
+        } else {
+            self.spans.as_slice()
         }
     }
 
-    /// The heap buffer, emptied, for a large block's intervals (taken from
-    /// the thread's pool the first time).
+    #[inline(always)]
+    fn set_spans(&mut self, spans: Spans) {
+        self.spans = spans;
+        self.on_heap = false;
+    }
+
+    /// Into the heap buffer (taken from the thread's pool the first time).
     #[cold]
-    pub(crate) fn heap(&mut self) -> &mut Vec<Interval> {
+    fn set_large(&mut self, fill: impl FnOnce(&mut Vec<Interval>)) {
         if self.heap.capacity() == 0 {
             self.heap = SPILLED.with(|c| c.take());
         }
         self.heap.clear();
-        &mut self.heap
+        fill(&mut self.heap);
+        self.on_heap = true;
     }
-}
 
-impl SpanBuf {
-    /// The heap buffer as it is (a large block's intervals, [`Spans::Heap`]).
-    pub(crate) fn heap_mut(&mut self) -> &mut Vec<Interval> {
-        &mut self.heap
+    #[inline]
+    fn large_mut(&mut self) -> Option<&mut Vec<Interval>> {
+        self.on_heap.then_some(&mut self.heap)
+    }
+
+    #[inline(always)]
+    fn spans_mut(&mut self) -> &mut Spans {
+        self.on_heap = false;
+        &mut self.spans
     }
 }
 
 impl Drop for SpanBuf {
-    #[inline]
     fn drop(&mut self) {
         if self.heap.capacity() != 0 {
             let heap = core::mem::take(&mut self.heap);
@@ -278,7 +360,7 @@ impl Block {
 
     /// [`Block::intervals`] without building a set for a convex block.
     pub(crate) fn spans(&self, ray: &Ray) -> SpanBuf {
-        let mut spans = SpanBuf::new();
+        let mut spans = <SpanBuf as Scratch>::new();
         self.spans_into(ray, &mut spans);
         spans
     }
@@ -288,28 +370,34 @@ impl Block {
     /// enum instead costs a copy of its full 272 bytes wherever it is
     /// passed on, whatever the variant.)
     #[inline(always)]
-    pub(crate) fn spans_into(&self, ray: &Ray, out: &mut SpanBuf) {
+    pub(crate) fn spans_into<S: Scratch>(&self, ray: &Ray, out: &mut S) {
         if self.convex {
             let solids = self.solids.iter().map(SolidRef::from);
             if let Some(spans) = convex_spans(ray, solids, self.precision) {
-                out.spans = spans;
+                out.set_spans(spans);
                 return;
             }
         }
-        self.spans_general_into(ray, out);
+        self.spans_rare_into(ray, out);
     }
 
-    /// `out.spans = self.spans_general(ray)`, out of line: the rare case;
-    /// a block too large for an interval set writes into `out`'s heap buffer.
+    /// `*out = self.spans_general(ray)`, out of line: the rare case.
     #[cold]
     #[inline(never)]
-    pub(crate) fn spans_general_into(&self, ray: &Ray, out: &mut SpanBuf) {
-        if self.fits {
-            out.spans = self.spans_general(ray);
-        } else {
-            self.spans_large(ray, out.heap());
-            out.spans = Spans::Heap;
+    pub(crate) fn spans_general_into(&self, ray: &Ray, out: &mut Spans) {
+        *out = self.spans_general(ray);
+    }
+
+    /// The intervals of a block that is not convex (or whose convex test
+    /// failed): [`Block::spans_general_into`] for a block that fits a set,
+    /// else the heap path (which a bare [`Spans`] scratch, used only where
+    /// no block is large, compiles away).
+    #[inline(always)]
+    pub(crate) fn spans_rare_into<S: Scratch>(&self, ray: &Ray, out: &mut S) {
+        if S::LARGE && !self.fits {
+            return out.set_large(|heap| self.spans_large(ray, heap));
         }
+        self.spans_general_into(ray, out.spans_mut());
     }
 
     /// The precision mode its sets are computed in.
@@ -744,8 +832,8 @@ mod tests {
                     let set = block.spans_general(ray);
                     let mut heap = Vec::new();
                     block.spans_large(ray, &mut heap);
-                    let mut buf = SpanBuf::new();
-                    buf.spans = set;
+                    let mut buf = <SpanBuf as Scratch>::new();
+                    buf.set_spans(set);
                     prop_assert_eq!(buf.as_slice(), &heap[..], "{:?} {:?}", precision, ray);
                 }
             }

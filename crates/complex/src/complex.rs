@@ -3,7 +3,7 @@
 use quadric::nalgebra::{Point3, Vector3};
 use quadric::{Bound, Interval, IntervalSet, Ray};
 
-use crate::block::{SolidRef, SpanBuf, Spans};
+use crate::block::{Scratch, SolidRef, SpanBuf, Spans};
 use crate::bounds::block_boxes;
 use crate::bvh::{Bvh, RayBoxes, RayBoxes4};
 use crate::kernel::Kernel;
@@ -112,6 +112,13 @@ pub struct Complex {
     points: PointGrid,
     epsilon: f64,
     any_transparent: bool,
+    /// Some block is too large for an interval set
+    /// ([`Block::fits_interval_set`]): the queries then take the scratch
+    /// with a heap buffer ([`SpanBuf`]), else the bare [`Spans`].
+    large: bool,
+    /// Opaque blocks only, each fitting an interval set: the common case,
+    /// tested first.
+    plain: bool,
 }
 
 impl Complex {
@@ -156,7 +163,20 @@ impl Complex {
             slot_of[kernel.block(k) as usize] = k;
         }
         let any_transparent = blocks.iter().any(Block::is_transparent);
-        let mut complex = Complex { blocks, boxes, bvh, kernel, slot_of, unbounded, points, epsilon, any_transparent };
+        let large = !blocks.iter().all(Block::fits_interval_set);
+        let mut complex = Complex {
+            blocks,
+            boxes,
+            bvh,
+            kernel,
+            slot_of,
+            unbounded,
+            points,
+            epsilon,
+            any_transparent,
+            large,
+            plain: !any_transparent && !large,
+        };
         if options.precision != quadric::Precision::default() {
             complex.set_precision(options.precision);
         }
@@ -238,7 +258,7 @@ impl Complex {
     /// [`Block::fits_interval_set`]); [`Complex::block_intervals_into`]
     /// takes any block.
     pub fn block_intervals(&self, id: BlockId, ray: &Ray) -> IntervalSet {
-        let mut scratch = SpanBuf::new();
+        let mut scratch = <SpanBuf as Scratch>::new();
         self.block_intervals_in(id, ray, &mut scratch);
         match scratch.set() {
             Ok(set) => set,
@@ -250,7 +270,7 @@ impl Complex {
     /// `out` (cleared first): for a block of any size, allocating only if
     /// `out` must grow.
     pub fn block_intervals_into(&self, id: BlockId, ray: &Ray, out: &mut Vec<Interval>) {
-        let mut scratch = SpanBuf::new();
+        let mut scratch = <SpanBuf as Scratch>::new();
         self.block_intervals_in(id, ray, &mut scratch);
         out.clear();
         out.extend_from_slice(scratch.as_slice());
@@ -268,7 +288,7 @@ impl Complex {
     /// block) and read from there: a [`Spans`] value passed on by value is a
     /// 272-byte copy, whatever its variant.
     #[inline(always)]
-    fn slot_spans<'s>(&self, k: u32, ray: &Ray, rb: &RayBoxes, scratch: &'s mut SpanBuf) -> &'s [Interval] {
+    fn slot_spans<'s, S: Scratch>(&self, k: u32, ray: &Ray, rb: &RayBoxes, scratch: &'s mut S) -> &'s [Interval] {
         self.kernel.spans_into(k, ray, &self.blocks, scratch);
         self.clip_to_box(self.kernel.block(k), scratch, ray, rb);
         scratch.as_slice()
@@ -277,7 +297,7 @@ impl Complex {
     /// The intervals of block `i`, clipped to its box (for unbounded
     /// blocks), like [`Complex::slot_spans`].
     #[inline]
-    fn block_spans<'s>(&self, i: u32, ray: &Ray, rb: &RayBoxes, scratch: &'s mut SpanBuf) -> &'s [Interval] {
+    fn block_spans<'s, S: Scratch>(&self, i: u32, ray: &Ray, rb: &RayBoxes, scratch: &'s mut S) -> &'s [Interval] {
         self.blocks[i as usize].spans_into(ray, scratch);
         self.clip_to_box(i, scratch, ray, rb);
         scratch.as_slice()
@@ -289,7 +309,7 @@ impl Complex {
     /// partition and `cast_ray` see the same spans. The common case (nothing outside) is two
     /// comparisons after the slab test.
     #[inline(always)]
-    fn clip_to_box(&self, i: u32, spans: &mut SpanBuf, ray: &Ray, rb: &RayBoxes) {
+    fn clip_to_box<S: Scratch>(&self, i: u32, spans: &mut S, ray: &Ray, rb: &RayBoxes) {
         let s = spans.as_slice();
         let (Some(first), Some(last)) = (s.first(), s.last()) else { return };
         let b = &self.boxes[i as usize];
@@ -306,7 +326,7 @@ impl Complex {
     /// there (the box face is near that solid's surface), else solid 0.
     #[cold]
     #[inline(never)]
-    fn clip_spans(&self, i: u32, spans: &mut SpanBuf, lo: f64, hi: f64, ray: &Ray) {
+    fn clip_spans<S: Scratch>(&self, i: u32, spans: &mut S, lo: f64, hi: f64, ray: &Ray) {
         let solids = self.blocks[i as usize].solids();
         let tag = |b: Bound, t: f64| {
             let x = ray.at(t);
@@ -318,9 +338,8 @@ impl Complex {
             let exit = if iv.exit.t > hi { tag(iv.exit, hi) } else { iv.exit };
             (enter.t < exit.t).then_some(Interval::new(enter, exit))
         };
-        if let Spans::Heap = spans.spans {
+        if let Some(heap) = spans.large_mut() {
             // A large block's intervals, clipped in place.
-            let heap = spans.heap_mut();
             let mut n = 0;
             for k in 0..heap.len() {
                 if let Some(iv) = clip(&heap[k]) {
@@ -339,12 +358,12 @@ impl Complex {
                 n += 1;
             }
         }
-        spans.spans = match &out[..n] {
+        spans.set_spans(match &out[..n] {
             [] => Spans::Empty,
             [iv] => Spans::One(*iv),
             // At most as many intervals as the block had: within capacity.
             many => Spans::Many(IntervalSet::from_intervals(many.iter().copied()).unwrap_or_default()),
-        };
+        });
     }
 
     /// The interval set of each block the ray meets, with intervals inside
@@ -386,6 +405,15 @@ impl Complex {
     /// the same slabs as the walk's), so they all end before ε and the ε
     /// rule would remove every one of them. The spans are the same.
     pub(crate) fn collect_spans(&self, ray: &Ray, max_t: f64, out: &mut BlockSpans) {
+        if self.large {
+            return self.collect_spans_in::<SpanBuf>(ray, max_t, out);
+        }
+        self.collect_spans_in::<Spans>(ray, max_t, out)
+    }
+
+    /// [`Complex::collect_spans`] with scratch `S` (see [`Scratch`]).
+    #[inline(always)]
+    fn collect_spans_in<S: Scratch>(&self, ray: &Ray, max_t: f64, out: &mut BlockSpans) {
         out.clear();
         let eps = self.epsilon;
         let mut push = |i: u32, spans: &[Interval]| {
@@ -394,7 +422,7 @@ impl Complex {
         let rb = RayBoxes::new(ray);
         let from = if max_t < eps { max_t } else { eps };
         let mut t_max = max_t;
-        let mut scratch = SpanBuf::new();
+        let mut scratch = S::new();
         self.bvh.traverse_any(&rb, from, &mut t_max, |k, _, _| {
             push(self.kernel.block(k), self.slot_spans(k, ray, &rb, &mut scratch))
         });
@@ -418,6 +446,21 @@ impl Complex {
         out: &mut BlockSpans,
         previous: Option<&BlockSpans>,
     ) -> f64 {
+        if self.large {
+            return self.collect_spans_to_first_end_in::<SpanBuf>(ray, after, out, previous);
+        }
+        self.collect_spans_to_first_end_in::<Spans>(ray, after, out, previous)
+    }
+
+    /// [`Complex::collect_spans_to_first_end`] with scratch `S` (see [`Scratch`]).
+    #[inline(always)]
+    fn collect_spans_to_first_end_in<S: Scratch>(
+        &self,
+        ray: &Ray,
+        after: f64,
+        out: &mut BlockSpans,
+        previous: Option<&BlockSpans>,
+    ) -> f64 {
         out.clear();
         let eps = self.epsilon;
         let mut push = |i: u32, intervals: &[Interval], t_max: &mut f64| {
@@ -432,7 +475,7 @@ impl Complex {
         let known = |i: u32| previous.and_then(|p| p.get(BlockId(i)));
         let rb = RayBoxes::new(ray);
         let mut t_max = f64::INFINITY;
-        let mut scratch = SpanBuf::new();
+        let mut scratch = S::new();
         for i in self.unbounded_crossed(&rb, 0.0, f64::INFINITY) {
             match known(i) {
                 Some(ivs) => push(i, ivs, &mut t_max),
@@ -515,10 +558,14 @@ impl Complex {
         if max_t.partial_cmp(&self.epsilon) != Some(core::cmp::Ordering::Greater) {
             return None;
         }
-        if !self.any_transparent {
-            return self.cast_opaque(ray, max_t);
+        if self.plain {
+            return self.cast_opaque::<Spans>(ray, max_t);
         }
-        self.cast_general(ray, max_t)
+        match (self.any_transparent, self.large) {
+            (false, _) => self.cast_opaque::<SpanBuf>(ray, max_t),
+            (true, false) => self.cast_general::<Spans>(ray, max_t),
+            (true, true) => self.cast_general::<SpanBuf>(ray, max_t),
+        }
     }
 
     /// Whether anything stops the ray in `(ε, max_t]`: exactly
@@ -540,9 +587,20 @@ impl Complex {
         if max_t.partial_cmp(&self.epsilon) != Some(core::cmp::Ordering::Greater) {
             return false;
         }
-        if self.any_transparent {
-            return self.cast_general(ray, max_t).is_some();
+        if self.plain {
+            return self.occluded_opaque::<Spans>(ray, max_t, occluder);
         }
+        match (self.any_transparent, self.large) {
+            (false, _) => self.occluded_opaque::<SpanBuf>(ray, max_t, occluder),
+            (true, false) => self.cast_general::<Spans>(ray, max_t).is_some(),
+            (true, true) => self.cast_general::<SpanBuf>(ray, max_t).is_some(),
+        }
+    }
+
+    /// [`Complex::occluded_with`] of a complex of opaque blocks, with
+    /// scratch `S` (see [`Scratch`]).
+    #[inline(always)]
+    fn occluded_opaque<S: Scratch>(&self, ray: &Ray, max_t: f64, occluder: &mut Occluder) -> bool {
         let eps = self.epsilon;
         let rb = RayBoxes::new(ray);
         // One walk answers both questions: is the ray inside the union just
@@ -569,7 +627,7 @@ impl Complex {
             enters
         };
         let mut t_max = max_t;
-        let mut scratch = SpanBuf::new();
+        let mut scratch = S::new();
         // The block that stopped the previous ray: if it stops this one
         // too, the walk below is the inside-probe only. (Looking at a block
         // twice changes nothing: `look` only raises `run_end` and sets
@@ -588,7 +646,7 @@ impl Complex {
         // Keep the hint while it stops the rays, else the block that did.
         occluder.slot = if hint_stops { tried } else { stopper };
         if run_end > eps {
-            return self.run_exit(ray, &rb, run_end, max_t).is_some();
+            return self.run_exit::<S>(ray, &rb, run_end, max_t).is_some();
         }
         found
     }
@@ -598,16 +656,16 @@ impl Complex {
     /// visibly. Each step is one front-to-back BVH query for the next end
     /// (with early exit) and one for the blocks covering the ray just after
     /// it; nothing is stored, so nothing is allocated.
-    fn cast_general(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
+    fn cast_general<S: Scratch>(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
         let rb = RayBoxes::new(ray);
         let mut tau = self.epsilon;
-        let mut before = self.owner_after(ray, &rb, tau);
+        let mut before = self.owner_after::<S>(ray, &rb, tau);
         loop {
-            let t = self.next_end(ray, &rb, tau, max_t)?;
-            let after = self.owner_after(ray, &rb, t);
+            let t = self.next_end::<S>(ray, &rb, tau, max_t)?;
+            let after = self.owner_after::<S>(ray, &rb, t);
             if after != before {
                 if self.visible_change(before, after) {
-                    if let Some(hit) = self.event_hit(ray, &rb, t, before, after) {
+                    if let Some(hit) = self.event_hit::<S>(ray, &rb, t, before, after) {
                         return Some(hit);
                     }
                 }
@@ -619,7 +677,7 @@ impl Complex {
 
     /// The owner of the ray just after `t`: the blocks with an interval
     /// `enter <= t < exit`, by the priority rule.
-    fn owner_after(&self, ray: &Ray, rb: &RayBoxes, t: f64) -> Option<BlockId> {
+    fn owner_after<S: Scratch>(&self, ray: &Ray, rb: &RayBoxes, t: f64) -> Option<BlockId> {
         let (mut opaque, mut transparent) = (u32::MAX, u32::MAX);
         let mut consider = |i: u32, spans: &[Interval]| {
             let best = if self.blocks[i as usize].is_transparent() { &mut transparent } else { &mut opaque };
@@ -628,7 +686,7 @@ impl Complex {
             }
         };
         let mut t_hi = t;
-        let mut scratch = SpanBuf::new();
+        let mut scratch = S::new();
         self.bvh.traverse_any(rb, t, &mut t_hi, |k, _, _| {
             consider(self.kernel.block(k), self.slot_spans(k, ray, rb, &mut scratch))
         });
@@ -639,7 +697,7 @@ impl Complex {
     }
 
     /// The smallest finite end of any block's interval in `(tau, max_t]`.
-    fn next_end(&self, ray: &Ray, rb: &RayBoxes, tau: f64, max_t: f64) -> Option<f64> {
+    fn next_end<S: Scratch>(&self, ray: &Ray, rb: &RayBoxes, tau: f64, max_t: f64) -> Option<f64> {
         let mut best: Option<f64> = None;
         let mut consider = |spans: &[Interval], t_max: &mut f64| {
             for iv in spans {
@@ -652,7 +710,7 @@ impl Complex {
             }
         };
         let mut t_max = max_t;
-        let mut scratch = SpanBuf::new();
+        let mut scratch = S::new();
         for i in self.unbounded_crossed(rb, tau, max_t) {
             consider(self.block_spans(i, ray, rb, &mut scratch), &mut t_max);
         }
@@ -675,7 +733,7 @@ impl Complex {
 
     /// The hit at a change of owner at `t`: the entry of the new owner if it
     /// starts there, else the exit of the old one (as in the partition).
-    fn event_hit(
+    fn event_hit<S: Scratch>(
         &self,
         ray: &Ray,
         rb: &RayBoxes,
@@ -684,14 +742,14 @@ impl Complex {
         after: Option<BlockId>,
     ) -> Option<Hit> {
         let entry = after.and_then(|id| {
-            let mut scratch = SpanBuf::new();
+            let mut scratch = S::new();
             let spans = self.block_spans(id.0, ray, rb, &mut scratch);
             let solid = spans.iter().find(|iv| iv.enter.t == t)?.enter.solid()?;
             Some(self.hit(ray, t, id.0, solid, true))
         });
         entry.or_else(|| {
             let id = before?;
-            let mut scratch = SpanBuf::new();
+            let mut scratch = S::new();
             let spans = self.block_spans(id.0, ray, rb, &mut scratch);
             let solid = spans.iter().find(|iv| iv.exit.t == t)?.exit.solid()?;
             Some(self.hit(ray, t, id.0, solid, false))
@@ -699,7 +757,7 @@ impl Complex {
     }
 
     /// `cast_ray` for complexes of opaque blocks only.
-    fn cast_opaque(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
+    fn cast_opaque<S: Scratch>(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
         let eps = self.epsilon;
         let rb = RayBoxes::new(ray);
         // One front-to-back walk with early exit finds the nearest entry
@@ -710,14 +768,14 @@ impl Complex {
         // so the shrinking `t_max` never cuts them off.
         let mut nearest = Nearest::new(eps);
         let mut t_max = max_t;
-        let mut scratch = SpanBuf::new();
+        let mut scratch = S::new();
         for i in self.unbounded_crossed(&rb, eps, max_t) {
             nearest.consider(i, None, self.block_spans(i, ray, &rb, &mut scratch), &mut t_max);
         }
         self.bvh.traverse(&rb, eps, &mut t_max, |k, _, t_max| {
             nearest.consider(self.kernel.block(k), Some(k), self.slot_spans(k, ray, &rb, &mut scratch), t_max)
         });
-        self.nearest_hit(ray, &rb, &nearest, max_t)
+        self.nearest_hit::<S>(ray, &rb, &nearest, max_t)
     }
 
     /// [`Complex::cast_ray`] of four rays, for coherent rays such as a
@@ -725,14 +783,15 @@ impl Complex {
     /// share one walk of the BVH (each node is read once for all of them);
     /// each answer is exactly `cast_ray`'s for its ray.
     pub fn cast_rays(&self, rays: &[Ray; 4], max_t: f64) -> [Option<Hit>; 4] {
-        if self.any_transparent || max_t.partial_cmp(&self.epsilon) != Some(core::cmp::Ordering::Greater) {
+        // With a block too large for an interval set, one ray at a time.
+        if !self.plain || max_t.partial_cmp(&self.epsilon) != Some(core::cmp::Ordering::Greater) {
             return rays.each_ref().map(|r| self.cast_ray(r, max_t));
         }
         let eps = self.epsilon;
         let rbs = rays.each_ref().map(RayBoxes::new);
         let mut nearest = [Nearest::new(eps); 4];
         let mut t_max = [max_t; 4];
-        let mut scratch = SpanBuf::new();
+        let mut scratch = Spans::Empty;
         for (lane, ray) in rays.iter().enumerate() {
             for i in self.unbounded_crossed(&rbs[lane], eps, max_t) {
                 let spans = self.block_spans(i, ray, &rbs[lane], &mut scratch);
@@ -743,14 +802,14 @@ impl Complex {
             let spans = self.slot_spans(k, &rays[lane], &rbs[lane], &mut scratch);
             nearest[lane].consider(self.kernel.block(k), Some(k), spans, &mut t_max[lane]);
         });
-        [0, 1, 2, 3].map(|lane| self.nearest_hit(&rays[lane], &rbs[lane], &nearest[lane], max_t))
+        [0, 1, 2, 3].map(|lane| self.nearest_hit::<Spans>(&rays[lane], &rbs[lane], &nearest[lane], max_t))
     }
 
     /// The hit a [`Nearest`] search found: the exit of the run the ray
     /// starts in, else the nearest entry.
-    fn nearest_hit(&self, ray: &Ray, rb: &RayBoxes, nearest: &Nearest, max_t: f64) -> Option<Hit> {
+    fn nearest_hit<S: Scratch>(&self, ray: &Ray, rb: &RayBoxes, nearest: &Nearest, max_t: f64) -> Option<Hit> {
         if nearest.run_end > self.epsilon {
-            return self.run_exit(ray, rb, nearest.run_end, max_t);
+            return self.run_exit::<S>(ray, rb, nearest.run_end, max_t);
         }
         let (t, block, solid, slot) = nearest.best?;
         // The normal from the packed copy of the solid, which the test just
@@ -770,7 +829,7 @@ impl Complex {
     }
 
     /// The exit from the run of overlapping intervals containing `(ε, run_end]`.
-    fn run_exit(&self, ray: &Ray, rb: &RayBoxes, mut run_end: f64, max_t: f64) -> Option<Hit> {
+    fn run_exit<S: Scratch>(&self, ray: &Ray, rb: &RayBoxes, mut run_end: f64, max_t: f64) -> Option<Hit> {
         loop {
             let mut next = run_end;
             // The lowest block id whose interval ends exactly at `next`: the
@@ -790,7 +849,7 @@ impl Complex {
                 }
             };
             let mut t_hi = run_end;
-            let mut scratch = SpanBuf::new();
+            let mut scratch = S::new();
             self.bvh.traverse_any(rb, self.epsilon, &mut t_hi, |k, _, _| {
                 extend(self.kernel.block(k), self.slot_spans(k, ray, rb, &mut scratch))
             });

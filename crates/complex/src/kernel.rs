@@ -14,7 +14,7 @@
 
 use quadric::{HalfSpace, Precision, Quadric, Ray, Rebased, Solid};
 
-use crate::block::{ConvexSpan, SolidRef, SpanBuf, Spans};
+use crate::block::{ConvexSpan, Scratch, SolidRef, Spans};
 use crate::bounds::Ball;
 use crate::Block;
 
@@ -253,13 +253,13 @@ impl Kernel {
     /// in place, like [`Block::spans_into`]: a convex block writes at most
     /// one interval, not a 272-byte enum.)
     #[inline(always)]
-    pub(crate) fn spans_into(&self, k: u32, ray: &Ray, blocks: &[Block], out: &mut SpanBuf) {
+    pub(crate) fn spans_into<S: Scratch>(&self, k: u32, ray: &Ray, blocks: &[Block], out: &mut S) {
         let slot = &self.slots[k as usize];
         if slot.count > 0 {
             let spans = match self.precision {
                 Precision::Accurate => {
                     if slot.ball.radius < f64::INFINITY && slot.ball.missed_by(ray) {
-                        out.spans = Spans::Empty;
+                        out.set_spans(Spans::Empty);
                         return;
                     }
                     self.packed_spans::<false>(slot, ray)
@@ -269,11 +269,11 @@ impl Kernel {
                 _ => None,
             };
             if let Some(spans) = spans {
-                out.spans = spans;
+                out.set_spans(spans);
                 return;
             }
         }
-        blocks[slot.block as usize].spans_general_into(ray, out);
+        blocks[slot.block as usize].spans_rare_into(ray, out);
     }
 
     /// [`convex_spans`](crate::block::convex_spans) from the packed
@@ -337,6 +337,7 @@ mod tests {
     use quadric::{strategies, Transform};
 
     use super::*;
+    use crate::block::SpanBuf;
     use crate::bounds::block_boxes;
     use crate::{MaterialKey, Opacity};
 
@@ -549,7 +550,7 @@ mod tests {
                 let Some(across) = dir.cross(&radial).try_normalize(1e-9) else { continue };
                 let aim = c + radial * (1.0 - inside);
                 let Ok(ray) = Ray::new(aim - across * (back * radial.norm()), across) else { continue };
-                let mut packed = SpanBuf::new();
+                let mut packed = <SpanBuf as Scratch>::new();
                 kernel.spans_into(0, &ray, std::slice::from_ref(&block), &mut packed);
                 let plain = block.spans(&ray);
                 prop_assert_eq!(packed.as_slice(), plain.as_slice(), "inside by {}", inside);
@@ -615,7 +616,7 @@ mod tests {
                 let rho = ball.radius * (1.0 + off) / (1.0 + 1e-6);
                 let foot = Point3::from(ball.centre) + side * rho + r * (along * size);
                 let Ok(ray) = Ray::new(foot - r * (back * size), r) else { continue };
-                let mut packed = SpanBuf::new();
+                let mut packed = <SpanBuf as Scratch>::new();
                 kernel.spans_into(0, &ray, std::slice::from_ref(&block), &mut packed);
                 let plain = block.spans(&ray);
                 prop_assert_eq!(packed.as_slice(), plain.as_slice(), "off {}", off);
@@ -661,7 +662,7 @@ mod tests {
                     for k in 0..order.len() as u32 {
                         let id = kernel.block(k);
                         prop_assert_eq!(id, order[k as usize]);
-                        let mut packed = SpanBuf::new();
+                        let mut packed = <SpanBuf as Scratch>::new();
                         kernel.spans_into(k, ray, &blocks, &mut packed);
                         let plain = blocks[id as usize].spans(ray);
                         prop_assert_eq!(span_bits(&packed), span_bits(&plain), "{:?} slot {} ray {:?}", precision, k, ray);
