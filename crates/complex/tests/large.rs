@@ -165,6 +165,14 @@ fn queries_on_a_complex_with_a_large_block() {
         water_rays += usize::from(lists.get(BlockId(1)).is_some_and(|ivs| ivs.len() > 8));
     }
     assert!(water_rays > 10, "only {water_rays} rays met the water in more than 8 intervals");
+    // cast_rays: each answer is cast_ray's.
+    let four = rays(&mut rng, 40);
+    for r in four.chunks_exact(4) {
+        let got = c.cast_rays(&[r[0], r[1], r[2], r[3]], f64::INFINITY);
+        for (g, ray) in got.iter().zip(r) {
+            assert_eq!(*g, c.cast_ray(ray, f64::INFINITY));
+        }
+    }
     let mut owners = vec![None; points.len()];
     c.classify(&points, &mut owners).expect("lengths match");
     for (p, o) in points.iter().zip(&owners) {
