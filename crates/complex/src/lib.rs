@@ -20,6 +20,7 @@ mod error;
 mod kernel;
 mod partition;
 mod point_grid;
+pub mod shapes;
 mod spawn;
 
 pub use batch::Traces;
@@ -31,4 +32,5 @@ pub use partition::{BlockIntervals, Event, Partition, Segment, Surface};
 /// The kernel's precision modes: `quadric`'s type, re-exported (one type, documented there).
 #[doc(no_inline)]
 pub use quadric::Precision;
+pub use shapes::ShapeError;
 pub use spawn::{spawn_origin, Spawner, MARGIN as SPAWN_MARGIN};
