@@ -199,3 +199,42 @@ fn every_pixel_of_a_frame_is_its_own_primary_ray() {
         }
     }
 }
+
+/// A block with more non-convex solids than an interval set carries (a
+/// plate drilled by 12 holes in a row) loads, and `trace` reports all of
+/// its intervals along the row: inside the plate between the holes, out
+/// of it within them (membership sampled at each interval's middle and in
+/// each gap).
+#[test]
+fn trace_reports_every_interval_of_a_large_block() {
+    let holes: Vec<String> = (0..12)
+        .map(|k| {
+            format!(
+                r#"{{ "cylinder": {{ "radius": 0.25, "axis": "y" }}, "complement": true, "transform": [ {{ "translate": [{k}, 0, 0] }} ] }}"#
+            )
+        })
+        .collect();
+    let json = format!(
+        r#"{{ "camera": {{ "eye": [0, 5, 5], "direction": [0, -1, -1] }},
+              "blocks": [ {{ "name": "plate", "objects": [ {{ "halfspace": [0, 1, 0, -1] }}, {{ "halfspace": [0, -1, 0, -1] }}, {} ] }} ] }}"#,
+        holes.join(", ")
+    );
+    let dir = crate::support::tempdir();
+    let p = crate::support::write_scene(dir.path(), "plate.json", &json);
+    let args = ["trace", p.to_str().unwrap(), "--json", "--origin", "-1", "0", "0", "--direction", "1", "0", "0"];
+    let v: Value = serde_json::from_slice(&komplex_ok(dir.path(), &args).stdout).unwrap();
+    let intervals = v["blocks"][0]["intervals"].as_array().unwrap();
+    assert_eq!(intervals.len(), 13, "{intervals:?}");
+    let w = world(&p, None);
+    let plate = &w.complex.blocks()[0];
+    let at = |t: f64| plate.contains_point(&Point3::new(-1.0 + t, 0.0, 0.0));
+    let mut gap_start = 0.0;
+    for iv in intervals {
+        let (a, b) = (num(&iv[0]).unwrap(), num(&iv[1]).unwrap_or(100.0));
+        assert!(at(0.5 * (a + b)), "[{a}, {b}] should be inside");
+        if a > gap_start {
+            assert!(!at(0.5 * (gap_start + a)), "({gap_start}, {a}) should be outside");
+        }
+        gap_start = b;
+    }
+}

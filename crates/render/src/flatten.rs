@@ -6,7 +6,7 @@
 
 use std::collections::BTreeMap;
 
-use complex::{Block, MaterialKey, Opacity};
+use complex::{Block, MaterialKey, Opacity, ShapeError};
 use quadric::nalgebra::{Matrix4, Vector3};
 use quadric::{GeometryError, HalfSpace, Quadric, Solid, Transform};
 
@@ -324,8 +324,18 @@ fn solid_of(o: &ObjectSpec, place: Place<'_>) -> Result<Solid, SceneError> {
         let r = positive(s.radius, "sphere.radius")?;
         let c = s.center.unwrap_or([0.0; 3]);
         finite_triple(&c, place, "sphere.center")?;
-        let m = Transform::scale(r).map_err(geo)?.then(&Transform::translate(vec3(c)).map_err(geo)?);
-        sized(Quadric::sphere(), &m, "sphere.radius", r)?
+        // The kernel's ball; an overflow is left to the check after all the
+        // transforms, as for the other shapes.
+        match complex::shapes::sphere(vec3(c).into(), r) {
+            Ok(ball) => ball,
+            Err(ShapeError::Geometry(e @ GeometryError::Underflow { .. })) => {
+                return Err(err(format!("sphere.radius {r:e}: {e}")))
+            }
+            Err(_) => {
+                let m = Transform::scale(r).map_err(geo)?.then(&Transform::translate(vec3(c)).map_err(geo)?);
+                Solid::from(Quadric::sphere().transformed(&m))
+            }
+        }
     } else if let Some(c) = &o.cylinder {
         let r = positive(c.radius, "cylinder.radius")?;
         let tube = match c.axis.unwrap_or_default() {
