@@ -246,3 +246,31 @@ fn intervals_into_equals_intervals() {
     }
     assert!(met > 100, "the rays met only {met} blocks");
 }
+
+/// `Precision::Certified` with two copies of a large block: every end of
+/// the later one ties exactly with one of the earlier, so the partition
+/// settles ties between large sets; its owners follow membership, and
+/// the later copy owns nothing.
+#[test]
+fn certified_partition_settles_ties_between_large_blocks() {
+    let plate = drilled(9);
+    let mut c = complex(vec![block("first", plate.clone(), T, 0), block("second", plate, T, 1)]);
+    c.set_precision(Precision::Certified);
+    let mut rng = Rng::new(0x7_1E5);
+    let mut partition = Partition::default();
+    let mut inside = 0;
+    for ray in rays(&mut rng, 30) {
+        c.partition_into(&ray, &mut partition);
+        for s in &partition.segments {
+            assert_ne!(s.owner, Some(BlockId(1)), "the later copy owns {s:?} of {ray:?}");
+            let end = if s.end.is_finite() { s.end } else { s.start + 30.0 };
+            if end - s.start < 1e-6 {
+                continue;
+            }
+            let p = ray.at(0.5 * (s.start + end));
+            assert_eq!(s.owner.is_some(), c.block(BlockId(0)).contains_point(&p), "{s:?} of {ray:?}");
+            inside += usize::from(s.owner.is_some());
+        }
+    }
+    assert!(inside > 30, "only {inside} segments inside the plate");
+}
