@@ -561,6 +561,13 @@ impl Complex {
         if self.plain {
             return self.cast_opaque::<Spans>(ray, max_t);
         }
+        self.cast_ray_other(ray, max_t)
+    }
+
+    /// [`Complex::cast_ray`] of a complex with transparent or large blocks,
+    /// out of line (the common case's function stays as small as it was).
+    #[inline(never)]
+    fn cast_ray_other(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
         match (self.any_transparent, self.large) {
             (false, _) => self.cast_opaque::<SpanBuf>(ray, max_t),
             (true, false) => self.cast_general::<Spans>(ray, max_t),
@@ -590,6 +597,13 @@ impl Complex {
         if self.plain {
             return self.occluded_opaque::<Spans>(ray, max_t, occluder);
         }
+        self.occluded_other(ray, max_t, occluder)
+    }
+
+    /// [`Complex::occluded_with`] of a complex with transparent or large
+    /// blocks, out of line.
+    #[inline(never)]
+    fn occluded_other(&self, ray: &Ray, max_t: f64, occluder: &mut Occluder) -> bool {
         match (self.any_transparent, self.large) {
             (false, _) => self.occluded_opaque::<SpanBuf>(ray, max_t, occluder),
             (true, false) => self.cast_general::<Spans>(ray, max_t).is_some(),
