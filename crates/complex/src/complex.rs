@@ -534,6 +534,51 @@ impl Complex {
         [opaque, transparent].into_iter().find(|&i| i != u32::MAX).map(BlockId)
     }
 
+    /// Every block that contains `p`, in priority order, into `out` (its
+    /// previous contents replaced): each block with
+    /// [`Block::contains_point`], found through the BVH as
+    /// [`Complex::contains_point`] finds its owner (the first opaque block
+    /// of the list, else its first). Two or more blocks mean that `p` lies
+    /// where blocks overlap. Empty for a non-finite `p`; allocates only
+    /// when `out` must grow.
+    ///
+    /// ```
+    /// use complex::{Block, BlockId, Complex, ComplexOptions, MaterialKey, Opacity};
+    /// use quadric::nalgebra::{Point3, Vector3};
+    /// use quadric::{Quadric, Solid, Transform};
+    /// let ball = |x: f64| {
+    ///     let m = Transform::translate(Vector3::new(x, 0.0, 0.0)).unwrap();
+    ///     let solid = Solid::from(Quadric::sphere().transformed(&m));
+    ///     Block::new("ball", vec![solid], Opacity::Opaque, MaterialKey(0)).unwrap()
+    /// };
+    /// let scene = Complex::new(vec![ball(0.0), ball(1.0)], ComplexOptions::default()).unwrap();
+    /// let mut inside = Vec::new();
+    /// scene.blocks_containing(&Point3::new(0.5, 0.0, 0.0), &mut inside);
+    /// assert_eq!(inside, [BlockId(0), BlockId(1)]);
+    /// scene.blocks_containing(&Point3::new(1.8, 0.0, 0.0), &mut inside);
+    /// assert_eq!(inside, [BlockId(1)]);
+    /// scene.blocks_containing(&Point3::new(5.0, 0.0, 0.0), &mut inside);
+    /// assert!(inside.is_empty());
+    /// ```
+    pub fn blocks_containing(&self, p: &Point3<f64>, out: &mut Vec<BlockId>) {
+        out.clear();
+        if !p.iter().all(|c| c.is_finite()) {
+            return;
+        }
+        self.bvh.visit_point(&[p.x, p.y, p.z], |i| {
+            if self.blocks[i as usize].contains_point(p) {
+                out.push(BlockId(i));
+            }
+        });
+        for &i in &self.unbounded {
+            if self.boxes[i as usize].contains_point(p) && self.blocks[i as usize].contains_point(p) {
+                out.push(BlockId(i));
+            }
+        }
+        // The walk meets the blocks in tree order.
+        out.sort_unstable();
+    }
+
     /// Whether an event is an interface a renderer sees: the medium changes
     /// there. Events between two opaque blocks (inside opaque matter) and
     /// between two transparent blocks of the same material are not.

@@ -10,6 +10,7 @@ mod kernel;
 mod large;
 mod options;
 mod oracle;
+mod points;
 mod secondary;
 mod stress;
 mod transparency;
