@@ -31,8 +31,11 @@ struct Cli {
 enum Command {
     /// Render a scene to OpenEXR (and optionally a PNG preview).
     Render(RenderArgs),
-    /// Trace one ray and print every block's intervals, the partition and the first hit.
+    /// Trace one ray and print every block's intervals, the partition and the first hit
+    /// (or, with --rays, every ray of a file and its partition).
     Trace(TraceArgs),
+    /// Write the ownership map of a plane (PNG: coloured, boundaries drawn, overlaps hatched; EXR: ids).
+    Slice(SliceArgs),
     /// Validate a scene and print a summary with warnings.
     Check {
         /// The scene file (JSON).
@@ -81,14 +84,65 @@ struct TraceArgs {
     /// The scene file (JSON).
     scene: PathBuf,
     /// Ray origin.
-    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true, required = true)]
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+    #[arg(required_unless_present = "rays", conflicts_with = "rays")]
     origin: Vec<f64>,
     /// Ray direction (normalised before use).
-    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true, required = true)]
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+    #[arg(required_unless_present = "rays", conflicts_with = "rays")]
     direction: Vec<f64>,
-    /// Print JSON instead of text.
+    /// Trace every ray of a file (CSV rows ox,oy,oz,dx,dy,dz, or .npy of shape (N, 6) or (N, 2, 3))
+    /// and write each one's partition as CSV (or JSON with --json).
+    #[arg(long, value_name = "FILE")]
+    rays: Option<PathBuf>,
+    /// Output file of --rays [default: stdout].
+    #[arg(short, long, value_name = "OUT", requires = "rays")]
+    output: Option<PathBuf>,
+    /// Print JSON instead of text (with --rays: instead of CSV).
     #[arg(long)]
     json: bool,
+}
+
+#[derive(clap::Args)]
+struct SliceArgs {
+    /// The scene file (JSON).
+    scene: PathBuf,
+    /// An axis-aligned plane: x=C, y=C or z=C.
+    #[arg(long, value_name = "AXIS=C", required_unless_present = "normal", conflicts_with_all = ["origin", "normal", "up"])]
+    plane: Option<String>,
+    /// A point of the plane (with --normal) [default: 0 0 0].
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true, requires = "normal")]
+    origin: Option<Vec<f64>>,
+    /// The plane's normal.
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+    normal: Option<Vec<f64>>,
+    /// The image's up direction (its part along the plane) [default: z, or y for a normal near z].
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true, requires = "normal")]
+    up: Option<Vec<f64>>,
+    /// Image size in pixels [default: 800 on the longer side, the other from the extent].
+    #[arg(long, num_args = 2, value_names = ["W", "H"])]
+    size: Option<Vec<u32>>,
+    /// The rectangle of plane coordinates shown [default: where the plane cuts the scene's box, 5 % margin].
+    #[arg(long, num_args = 4, value_names = ["U0", "U1", "V0", "V1"], allow_negative_numbers = true)]
+    extent: Option<Vec<f64>>,
+    /// Output image, by extension: .png (coloured map) or .exr (id.block, id.material, overlap).
+    #[arg(short, long, value_name = "OUT.png|OUT.exr", required = true)]
+    output: PathBuf,
+    /// What colours the PNG.
+    #[arg(long, value_enum, default_value_t = ColorByArg::Block)]
+    color_by: ColorByArg,
+    /// Worker threads [default: one per core].
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
+}
+
+/// `--color-by`.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum ColorByArg {
+    /// One colour per block.
+    Block,
+    /// One colour per material.
+    Material,
 }
 
 #[derive(clap::Args)]
@@ -224,6 +278,7 @@ fn run(command: Command) -> Result<(), Error> {
     match command {
         Command::Render(args) => render(args),
         Command::Trace(args) => trace(args),
+        Command::Slice(args) => slice(args),
         Command::Check { scene } => check(&scene),
         Command::Schema => schema(),
         Command::ExportPov(args) => export_pov(args),
@@ -298,9 +353,20 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     Ok(())
 }
 
-/// `komplex trace`: one ray's report, as text or JSON.
+/// `komplex trace`: one ray's report, as text or JSON; with `--rays`, every
+/// ray's partition, as CSV or JSON.
 fn trace(args: TraceArgs) -> Result<(), Error> {
-    let TraceArgs { scene, origin, direction, json } = args;
+    let TraceArgs { scene, origin, direction, rays, output, json } = args;
+    if let Some(rays) = rays {
+        if let Some(p) = &output {
+            render::output::check_writable(p)?;
+        }
+        let rays = render::rays::read(&rays)?;
+        let world = render::load(&scene)?;
+        let traces = render::rays::trace(&world, &rays);
+        let text = if json { render::rays::to_json(&world, &traces)? } else { render::rays::to_csv(&world, &traces) };
+        return write_text(output.as_deref(), &text);
+    }
     let world = render::load(&scene)?;
     let report = render::trace::trace(&world, triple(&origin), triple(&direction))?;
     if json {
@@ -309,6 +375,38 @@ fn trace(args: TraceArgs) -> Result<(), Error> {
     } else {
         print!("{report}");
     }
+    Ok(())
+}
+
+/// `komplex slice`: the ownership map of a plane, checked writable before
+/// the work and written atomically.
+fn slice(args: SliceArgs) -> Result<(), Error> {
+    use render::slice::{ColorBy, Extent, Plane, Raster};
+    let SliceArgs { scene, plane, origin, normal, up, size, extent, output, color_by, threads } = args;
+    render::frame::set_global_threads(threads)?;
+    let plane = match (plane, normal) {
+        (Some(text), _) => Plane::axis(&text)?,
+        (None, Some(n)) => Plane::new(origin.map_or([0.0; 3], |o| triple(&o)), triple(&n), up.map(|u| triple(&u)))?,
+        // clap requires one of them.
+        (None, None) => return Err(Error::Options("give --plane or --normal".into())),
+    };
+    let extent = extent.map(|e| Extent::new(e[0], e[1], e[2], e[3])).transpose()?;
+    render::slice::ImageType::of(&output)?;
+    render::output::check_writable(&output)?;
+    let world = render::load(&scene)?;
+    let extent = match extent {
+        Some(e) => e,
+        None => plane.extent_of(&world.complex.aabb())?,
+    };
+    let raster = Raster::new(plane, extent, size.map(|s| (s[0], s[1])))?;
+    let map = render::slice::slice(&world, &raster);
+    let by = match color_by {
+        ColorByArg::Block => ColorBy::Block,
+        ColorByArg::Material => ColorBy::Material,
+    };
+    render::slice::write(map, &output, by)?;
+    let Extent { u0, u1, v0, v1 } = extent;
+    eprintln!("{}: {}x{}, u {u0:?} to {u1:?}, v {v0:?} to {v1:?}", output.display(), raster.width, raster.height);
     Ok(())
 }
 

@@ -182,6 +182,15 @@ pub enum Error {
     /// Bad options (image size, thread count, ray).
     #[error("{0}")]
     Options(String),
+    /// A data file other than the scene (the rays of `trace --rays`) is
+    /// invalid.
+    #[error("{}: {message}", .file.display())]
+    Data {
+        /// The file.
+        file: PathBuf,
+        /// What is wrong and where (line and column, or the ray).
+        message: String,
+    },
     /// The render was cancelled (Ctrl-C) before it finished.
     #[error("interrupted; no output was written")]
     Interrupted,
@@ -191,6 +200,6 @@ impl Error {
     /// Whether the error is the user's input (scene or options) rather than
     /// the environment (files, encoders).
     pub fn is_input_error(&self) -> bool {
-        matches!(self, Error::Scene { .. } | Error::Options(_))
+        matches!(self, Error::Scene { .. } | Error::Options(_) | Error::Data { .. })
     }
 }

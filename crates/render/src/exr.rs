@@ -73,3 +73,26 @@ pub fn write_exr(frame: Frame, path: &Path, color: ColorType) -> Result<(), Erro
     let image = Image::from_layer(layer);
     write_atomic(path, |w| image.write().to_buffered(w).map_err(|e| e.to_string()))
 }
+
+/// Writes `channels`, each `width * height` u32 samples in rows from the
+/// top, as one part with the render's layout (scanlines, ZIP compression),
+/// atomically: the id maps of `komplex slice`. Channels of the wrong length
+/// are an [`Error::Encode`], and nothing is written.
+pub fn write_u32_channels(
+    path: &Path,
+    (width, height): (u32, u32),
+    channels: Vec<(&str, Vec<u32>)>,
+) -> Result<(), Error> {
+    let size = (width as usize, height as usize);
+    if let Some((name, c)) = channels.iter().find(|(_, c)| c.len() != size.0 * size.1) {
+        let message = format!("channel {name} holds {} samples, not {}x{}", c.len(), size.0, size.1);
+        return Err(Error::Encode { path: path.to_path_buf(), message });
+    }
+    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> =
+        channels.into_iter().map(|(name, c)| AnyChannel::new(name, FlatSamples::U32(c))).collect();
+    let encoding =
+        Encoding { compression: Compression::ZIP16, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
+    let layer = Layer::new(size, LayerAttributes::default(), encoding, AnyChannels::sort(list));
+    let image = Image::from_layer(layer);
+    write_atomic(path, |w| image.write().to_buffered(w).map_err(|e| e.to_string()))
+}

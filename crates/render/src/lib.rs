@@ -37,7 +37,9 @@ mod locate;
 pub mod output;
 pub mod png;
 pub mod pov;
+pub mod rays;
 pub mod shade;
+pub mod slice;
 pub mod trace;
 pub mod world;
 

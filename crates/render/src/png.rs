@@ -31,3 +31,11 @@ pub fn write_png(frame: &Frame, path: &Path, exposure: f32) -> Result<(), Error>
         .ok_or_else(|| Error::Encode { path: path.to_path_buf(), message: "buffer size mismatch".into() })?;
     write_atomic(path, |w| img.write_to(w, image::ImageFormat::Png).map_err(|e| e.to_string()))
 }
+
+/// Writes 8-bit RGB `bytes` (three a pixel, rows from the top) as a PNG,
+/// atomically: the maps of `komplex slice`.
+pub fn write_rgb8(path: &Path, (width, height): (u32, u32), bytes: Vec<u8>) -> Result<(), Error> {
+    let img = image::RgbImage::from_raw(width, height, bytes)
+        .ok_or_else(|| Error::Encode { path: path.to_path_buf(), message: "buffer size mismatch".into() })?;
+    write_atomic(path, |w| img.write_to(w, image::ImageFormat::Png).map_err(|e| e.to_string()))
+}

@@ -34,6 +34,18 @@ pub struct SegmentReport {
     pub name: Option<String>,
 }
 
+impl SegmentReport {
+    /// The report of one of `complex`'s segments.
+    pub fn new(complex: &complex::Complex, s: &complex::Segment) -> Self {
+        SegmentReport {
+            start: s.start,
+            end: finite(s.end),
+            block: s.owner.map(|id| id.0 + 1),
+            name: s.owner.map(|id| complex.block(id).name().to_string()),
+        }
+    }
+}
+
 /// The first hit.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct HitReport {
@@ -84,16 +96,7 @@ pub fn trace(world: &World, origin: [f64; 3], direction: [f64; 3]) -> Result<Tra
         })
         .collect();
     let partition = complex.partition(&ray);
-    let segments = partition
-        .segments
-        .iter()
-        .map(|s| SegmentReport {
-            start: s.start,
-            end: finite(s.end),
-            block: s.owner.map(|id| id.0 + 1),
-            name: s.owner.map(|id| complex.block(id).name().to_string()),
-        })
-        .collect();
+    let segments = partition.segments.iter().map(|s| SegmentReport::new(complex, s)).collect();
     let hit = complex.cast_ray(&ray, f64::INFINITY).map(|h| HitReport {
         t: h.t,
         point: [h.point.x, h.point.y, h.point.z],
