@@ -13,6 +13,7 @@ mod exr_output;
 mod interrupt;
 mod mutations;
 mod shading;
+mod slice;
 mod trace;
 
 mod pov;
