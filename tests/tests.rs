@@ -17,3 +17,4 @@ mod slice;
 mod trace;
 
 mod pov;
+mod rays;
