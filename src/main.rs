@@ -96,7 +96,7 @@ struct TraceArgs {
     #[arg(long, value_name = "FILE")]
     rays: Option<PathBuf>,
     /// Output file of --rays [default: stdout].
-    #[arg(short, long, value_name = "OUT", requires = "rays")]
+    #[arg(short, long, value_name = "OUT")]
     output: Option<PathBuf>,
     /// Print JSON instead of text (with --rays: instead of CSV).
     #[arg(long)]
@@ -366,6 +366,9 @@ fn trace(args: TraceArgs) -> Result<(), Error> {
         let traces = render::rays::trace(&world, &rays);
         let text = if json { render::rays::to_json(&world, &traces)? } else { render::rays::to_csv(&world, &traces) };
         return write_text(output.as_deref(), &text);
+    }
+    if output.is_some() {
+        return Err(Error::Options("-o/--output goes with --rays; one ray's report is printed".into()));
     }
     let world = render::load(&scene)?;
     let report = render::trace::trace(&world, triple(&origin), triple(&direction))?;

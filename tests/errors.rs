@@ -57,8 +57,16 @@ fn snapshot(dir: &Path) -> BTreeMap<String, Option<Vec<u8>>> {
 /// status `code`, every `needles` in stderr, no panic, and the directory
 /// exactly as before: nothing written, clobbered or left behind.
 fn check<'a>(input: impl Into<Input<'a>>, code: i32, needles: &[&str]) {
+    check_with(&[], input, code, needles);
+}
+
+/// [`check`] with more files in the fixture directory (name, contents).
+fn check_with<'a>(files: &[(&str, &[u8])], input: impl Into<Input<'a>>, code: i32, needles: &[&str]) {
     let dir = tempdir();
     let d = dir.path();
+    for (name, contents) in files {
+        std::fs::write(d.join(name), contents).unwrap();
+    }
     write_scene(d, "ok.json", OK);
     std::fs::write(d.join("out.exr"), b"keep me").unwrap();
     std::fs::write(d.join("file"), b"a regular file").unwrap();
@@ -552,4 +560,131 @@ fn usage_errors_exit_2() {
     );
     check(&["paint", "ok.json"], 2, &["unrecognized subcommand 'paint'"]);
     check(&[""; 0], 2, &["Usage: komplex <COMMAND>"]);
+}
+
+/// A scene whose only block is a half-space (unbounded).
+const HALF: &[u8] = br#"{ "camera": { "eye": [0, 0, 5], "direction": [0, 0, -1] },
+                          "blocks": [ { "objects": [ { "halfspace": [0, 1, 0, 0] } ] } ] }"#;
+
+#[test]
+fn bad_slices_exit_1_and_name_the_option() {
+    let slice = |extra: &[&str], needle: &str| {
+        let mut args = vec!["slice", "ok.json", "-o", "s.png"];
+        args.extend(extra);
+        check(Input::Args(&args), 1, &[needle]);
+    };
+    slice(&["--plane", "w=1"], r#"--plane "w=1": the axis must be x, y or z, not "w""#);
+    slice(&["--plane", "z=abc"], r#"--plane "z=abc": "abc" is not a number"#);
+    slice(&["--plane", "z0.5"], r#"--plane "z0.5": expected x=C, y=C or z=C with a number C"#);
+    slice(&["--plane", "z=inf"], r#"--plane "z=inf": the coordinate must be finite"#);
+    slice(&["--normal", "0", "0", "0"], "--normal: the normal [0.0, 0.0, 0.0] is zero or not finite");
+    slice(
+        &["--normal", "0", "0", "1", "--up", "0", "0", "2"],
+        "--up: the vector [0.0, 0.0, 2.0] is zero or parallel to the normal",
+    );
+    slice(
+        &["--normal", "1", "0", "0", "--origin", "nan", "0", "0"],
+        "--origin: the point [NaN, 0.0, 0.0] is not finite",
+    );
+    slice(&["--plane", "z=0", "--size", "0", "10"], "--size: the image size 0x10 is empty");
+    slice(&["--plane", "z=0", "--size", "100000", "100000"], "--size: the image size 100000x100000 is too large");
+    slice(&["--plane", "z=0", "--extent", "1", "0", "0", "1"], "--extent 1 0 0 1: needs finite U0 < U1 and V0 < V1");
+    slice(&["--plane", "z=5"], "the plane does not cut the scene's bounding box: give --extent U0 U1 V0 V1");
+    check(
+        &["slice", "ok.json", "--plane", "z=0", "-o", "s.tiff"],
+        1,
+        &["-o s.tiff: the slice is written as .png or .exr"],
+    );
+    check_with(
+        &[("half.json", HALF)],
+        &["slice", "half.json", "--plane", "z=0", "-o", "s.png"],
+        1,
+        &["the scene is unbounded (or empty), so the slice has no default extent: give --extent U0 U1 V0 V1"],
+    );
+    check(
+        &["slice", "ok.json", "--plane", "z=0", "-o", "missing/s.png"],
+        3,
+        &["missing/s.png: cannot create a file in directory missing"],
+    );
+    check(&["slice", "ok.json", "--plane", "z=0"], 2, &["required arguments were not provided", "--output"]);
+    check(
+        &["slice", "ok.json", "--plane", "z=0", "--normal", "0", "0", "1", "-o", "s.png"],
+        2,
+        &["cannot be used with"],
+    );
+}
+
+/// A `.npy` file's bytes: the header dict, padded, then `data`.
+fn npy(major: u8, header: &str, data: &[u8]) -> Vec<u8> {
+    let mut out = b"\x93NUMPY".to_vec();
+    out.extend([major, 0]);
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(header.as_bytes());
+    out.extend_from_slice(data);
+    out
+}
+
+#[test]
+fn bad_ray_files_exit_1_and_name_the_place() {
+    let rays = |name: &str, contents: &[u8], needle: &str| {
+        check_with(&[(name, contents)], &["trace", "ok.json", "--rays", name, "-o", "out.csv"], 1, &[needle]);
+    };
+    rays(
+        "r.csv",
+        b"ox,oy,oz,dx,dy,dz\n0,0,5,0,0,-1\n0,0,five,0,0,-1\n",
+        r#"r.csv: line 3, column 5: "five" is not a number"#,
+    );
+    rays("r.csv", b"0,0,5,0,0\n", "r.csv: line 1: expected 6 numbers (ox,oy,oz,dx,dy,dz), found 5 fields");
+    rays("r.csv", b"# a comment\n\n0,0,5,0,0,-1\n1,0,5,0,0,0\n", "r.csv: line 4 (ray 1): the ray direction is zero");
+    rays("r.csv", b"inf,0,5,0,0,-1\n", "r.csv: line 1 (ray 0): the ray origin is not finite");
+    rays("r.csv", b"0,0,5,0,0,-1\n\xff\n", "r.csv: line 2: the file is not UTF-8 text (byte 14)");
+    let f8 = |v: &[f64]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    let one = f8(&[0.0, 0.0, 5.0, 0.0, 0.0, -1.0]);
+    rays("r.npy", b"ox,oy,oz,dx,dy,dz\n", r"r.npy: not a .npy file (it does not start with \x93NUMPY)");
+    rays("r.npy", &npy(4, "{}", &[]), "r.npy: header: .npy format version 4 is not supported (1, 2 or 3 are)");
+    rays(
+        "r.npy",
+        &npy(1, "{'descr': '>f8', 'fortran_order': False, 'shape': (1, 6), }\n", &one),
+        "r.npy: header: the array's type is '>f8'; only little-endian float64 ('<f8') or float32 ('<f4') are read",
+    );
+    rays(
+        "r.npy",
+        &npy(1, "{'descr': '<f8', 'fortran_order': False, 'shape': (2, 3), }\n", &one),
+        "r.npy: header: the shape is (2, 3); expected (N, 6) or (N, 2, 3)",
+    );
+    rays(
+        "r.npy",
+        &npy(1, "{'descr': '<f8', 'fortran_order': False, 'shape': (2, 6), }\n", &one),
+        "r.npy: the data holds 48 bytes; the shape (2, 6) of '<f8' needs 96 bytes",
+    );
+    rays(
+        "r.npy",
+        &npy(1, "{'descr': '<f8', 'shape': (1, 6), }\n", &one),
+        "r.npy: header: no 'fortran_order' in {'descr': '<f8', 'shape': (1, 6), }",
+    );
+    rays(
+        "r.npy",
+        &npy(
+            1,
+            "{'descr': '<f8', 'fortran_order': False, 'shape': (2, 6), }\n",
+            &f8(&[0.0, 0.0, 5.0, 0.0, 0.0, -1.0, 1.0, 0.0, 5.0, 0.0, 0.0, 0.0]),
+        ),
+        "r.npy: ray 1: the ray direction is zero",
+    );
+    check(&["trace", "ok.json", "--rays", "none.csv"], 3, &["none.csv: No such file or directory"]);
+    check(
+        &["trace", "ok.json", "--rays", "none.csv", "-o", "missing/out.csv"],
+        3,
+        &["missing/out.csv: cannot create a file in directory missing"],
+    );
+    check(
+        &["trace", "ok.json", "--rays", "r.csv", "--origin", "0", "0", "5"],
+        2,
+        &["the argument '--rays <FILE>' cannot be used with '--origin <X> <Y> <Z>'"],
+    );
+    check(
+        &["trace", "ok.json", "-o", "out.csv", "--origin", "0", "0", "5", "--direction", "0", "0", "-1"],
+        1,
+        &["-o/--output goes with --rays; one ray's report is printed"],
+    );
 }
