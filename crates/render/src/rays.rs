@@ -121,6 +121,23 @@ fn header_value<'a>(header: &'a str, key: &str) -> Result<&'a str, String> {
 
 /// The rays of a `.npy` file's bytes, or a message naming the header's
 /// problem or the ray.
+///
+/// ```
+/// // What `numpy.save` writes for `np.array([[0, 0, 5, 0, 0, -2]], dtype="<f4")`.
+/// let header = "{'descr': '<f4', 'fortran_order': False, 'shape': (1, 6), }";
+/// let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+/// bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
+/// bytes.extend_from_slice(header.as_bytes());
+/// bytes.extend([0.0f32, 0.0, 5.0, 0.0, 0.0, -2.0].iter().flat_map(|x| x.to_le_bytes()));
+/// let rays = render::rays::parse_npy(&bytes).unwrap();
+/// assert_eq!(rays[0].origin(), [0.0, 0.0, 5.0].into());
+/// assert_eq!(rays[0].direction().as_slice(), [0.0, 0.0, -1.0]);
+/// let wrong = bytes.len() - 4;
+/// assert_eq!(
+///     render::rays::parse_npy(&bytes[..wrong]).unwrap_err(),
+///     "the data holds 20 bytes; the shape (1, 6) of '<f4' needs 24 bytes"
+/// );
+/// ```
 pub fn parse_npy(bytes: &[u8]) -> Result<Vec<Ray>, String> {
     if !bytes.starts_with(NPY_MAGIC) || bytes.len() < 10 {
         return Err("not a .npy file (it does not start with \\x93NUMPY)".into());
@@ -247,6 +264,18 @@ pub struct RaysReport {
 
 /// The segments as one JSON document `{"rays": [{"segments": [...]}, ...]}`
 /// (and a line break), each segment as in `komplex trace --json`.
+///
+/// ```
+/// let text = r#"{ "camera": { "eye": [0, 0, 5], "direction": [0, 0, -1] },
+///   "blocks": [ { "name": "ball", "objects": [ { "sphere": {} } ] } ] }"#;
+/// let world = render::format::SceneFile::from_json(text).unwrap().to_world().unwrap();
+/// let rays = render::rays::parse_csv("0,0,5,0,0,-1\n0,3,5,0,0,-1").unwrap();
+/// let json = render::rays::to_json(&world, &render::rays::trace(&world, &rays)).unwrap();
+/// let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+/// assert_eq!(v["rays"][0]["segments"][1]["name"], "ball");
+/// assert_eq!(v["rays"][1]["segments"].as_array().unwrap().len(), 1); // a miss: empty space to infinity
+/// assert!(v["rays"][1]["segments"][0]["end"].is_null());
+/// ```
 pub fn to_json(world: &World, traces: &Traces) -> Result<String, Error> {
     let rays = traces
         .iter()
