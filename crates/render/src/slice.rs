@@ -463,3 +463,96 @@ pub fn write(map: Slice, path: &Path, by: ColorBy) -> Result<(), Error> {
         ),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Normals along the axes, both ways, near `z`, and oblique.
+    const NORMALS: [[f64; 3]; 9] = [
+        [1.0, 0.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, -3.0],
+        [0.1, 0.2, 1.0],
+        [1.0, 1.0, 1.0],
+        [-2.0, 0.5, 0.3],
+        [1e-200, 1e-200, 3e-200],
+        [1e200, -1e200, 0.0],
+    ];
+
+    #[test]
+    fn frames_are_orthonormal_right_handed_and_keep_up_upwards() {
+        for normal in NORMALS {
+            for up in [None, Some([0.3, 1.0, 0.2]), Some([-1.0, 0.0, 0.5])] {
+                let Ok(p) = Plane::new([1.0, 2.0, 3.0], normal, up) else {
+                    panic!("{normal:?} {up:?}");
+                };
+                let n = Vector3::from(normal);
+                let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+                assert!(close(p.u.norm(), 1.0) && close(p.v.norm(), 1.0) && close(p.normal.norm(), 1.0));
+                assert!(close(p.u.dot(&p.v), 0.0) && close(p.u.dot(&p.normal), 0.0) && close(p.v.dot(&p.normal), 0.0));
+                assert!((p.u.cross(&p.v) - p.normal).norm() < 1e-12, "{normal:?} {up:?}");
+                assert!(close(p.normal.dot(&(n / n.amax()).normalize()), 1.0), "{normal:?}");
+                let up =
+                    Vector3::from(up.unwrap_or(if p.normal.z.abs() < 0.9 { [0.0, 0.0, 1.0] } else { [0.0, 1.0, 0.0] }));
+                assert!(p.v.dot(&up) > 0.0, "{normal:?}: V {:?} points away from up {up:?}", p.v);
+                // (u, v) is a point of the plane, at distance (u, v) from the origin.
+                let q = p.at(0.7, -1.3);
+                assert!(close((q - p.origin).dot(&p.normal), 0.0) && close((q - p.origin).norm(), 0.7f64.hypot(1.3)));
+            }
+        }
+    }
+
+    #[test]
+    fn axis_planes_are_their_normal_and_up_planes() {
+        for (text, normal, up) in [
+            ("x=0", [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+            ("y=0", [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]),
+            ("z=0", [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
+        ] {
+            assert_eq!(Plane::axis(text).ok(), Plane::new([0.0; 3], normal, Some(up)).ok(), "{text}");
+        }
+    }
+
+    /// Every point of the plane inside the box lies in the default extent,
+    /// inside its margin (sampled on a grid of plane coordinates).
+    #[test]
+    fn the_default_extent_holds_where_the_plane_cuts_the_box() {
+        let boxes = [
+            Aabb { min: Point3::new(-1.0, -2.0, 0.5), max: Point3::new(3.0, 1.0, 2.0) },
+            Aabb { min: Point3::new(-0.1, -0.1, -0.1), max: Point3::new(0.1, 0.1, 0.1) },
+        ];
+        for b in boxes {
+            for normal in NORMALS {
+                let p = Plane::new(b.center().map_or([0.0; 3], |c| c.into()), normal, None).unwrap();
+                let e = p.extent_of(&b).unwrap();
+                let margin = 0.05 / 1.1 * (e.u1 - e.u0).max(e.v1 - e.v0);
+                let span = 2.0 * b.size().norm();
+                let steps = 200;
+                let mut inside = 0;
+                for a in 0..=steps {
+                    for c in 0..=steps {
+                        let (u, v) = (
+                            span * (f64::from(a) / f64::from(steps) - 0.5),
+                            span * (f64::from(c) / f64::from(steps) - 0.5),
+                        );
+                        if b.contains_point(&p.at(u, v)) {
+                            inside += 1;
+                            let eps = 1e-12 * span;
+                            assert!(
+                                u >= e.u0 + margin - eps && u <= e.u1 - margin + eps,
+                                "{normal:?}: u {u} outside {e:?}"
+                            );
+                            assert!(
+                                v >= e.v0 + margin - eps && v <= e.v1 - margin + eps,
+                                "{normal:?}: v {v} outside {e:?}"
+                            );
+                        }
+                    }
+                }
+                assert!(inside > 100, "{normal:?}: {inside} samples in the box");
+            }
+        }
+    }
+}
