@@ -525,8 +525,8 @@ mod tests {
         ];
         for b in boxes {
             for normal in NORMALS {
-                let p = Plane::new(b.center().map_or([0.0; 3], |c| c.into()), normal, None).unwrap();
-                let e = p.extent_of(&b).unwrap();
+                let p = Plane::new(b.center().map_or([0.0; 3], |c| c.into()), normal, None).expect("a valid plane");
+                let e = p.extent_of(&b).expect("the plane cuts the box");
                 let margin = 0.05 / 1.1 * (e.u1 - e.u0).max(e.v1 - e.v0);
                 let span = 2.0 * b.size().norm();
                 let steps = 200;
