@@ -209,3 +209,19 @@ fn the_default_extent_frames_where_the_plane_cuts_the_scene() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("d.png: 800x586, u -1.67"), "{err}");
 }
+
+#[test]
+fn a_slice_does_not_depend_on_the_thread_count() {
+    let dir = tempdir();
+    let s = scene("glass.json");
+    let s = s.to_str().unwrap();
+    for out in ["t.png", "t.exr"] {
+        let bytes = |threads: &str| {
+            let args =
+                ["slice", s, "--normal", "0.2", "1", "0.4", "--size", "300", "200", "--threads", threads, "-o", out];
+            komplex_ok(dir.path(), &args);
+            std::fs::read(dir.path().join(out)).unwrap()
+        };
+        assert!(bytes("1") == bytes("2"), "{out}");
+    }
+}
