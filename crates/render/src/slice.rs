@@ -1,10 +1,11 @@
 //! `komplex slice`: the exact ownership map of a plane. Each pixel's centre
 //! is one point of the plane; its owner is the kernel's answer
-//! ([`Complex::classify`], the priority rule of docs/model.md §3.4) and its
-//! overlap count the number of blocks whose own solids hold it
-//! ([`Complex::blocks_containing`]). The map goes to a PNG (colours by
-//! block or material, boundaries drawn, overlaps hatched) or to an EXR of
-//! ids.
+//! ([`Complex::classify`](complex::Complex::classify), the priority rule of
+//! docs/model.md §3.4) and its overlap count the number of blocks whose own
+//! solids hold it
+//! ([`Complex::blocks_containing`](complex::Complex::blocks_containing)).
+//! The map goes to a PNG (colours by block or material, boundaries drawn,
+//! overlaps hatched) or to an EXR of ids.
 
 use std::path::Path;
 
