@@ -565,18 +565,15 @@ impl Complex {
         if !p.iter().all(|c| c.is_finite()) {
             return;
         }
-        self.bvh.visit_point(&[p.x, p.y, p.z], |i| {
-            if self.blocks[i as usize].contains_point(p) {
-                out.push(BlockId(i));
-            }
-        });
-        for &i in &self.unbounded {
-            if self.boxes[i as usize].contains_point(p) && self.blocks[i as usize].contains_point(p) {
-                out.push(BlockId(i));
-            }
+        let holds = |i: u32| self.boxes[i as usize].contains_point(p) && self.blocks[i as usize].contains_point(p);
+        out.extend(self.points.cell_blocks(p).iter().copied().filter(|&i| holds(i)).map(BlockId));
+        let cell = out.len();
+        let others = self.points.wide_blocks().iter().chain(&self.unbounded);
+        out.extend(others.copied().filter(|&i| holds(i)).map(BlockId));
+        // The cell's blocks come in order; the wide and unbounded ones join them.
+        if out.len() > cell {
+            out.sort_unstable();
         }
-        // The walk meets the blocks in tree order.
-        out.sort_unstable();
     }
 
     /// Whether an event is an interface a renderer sees: the medium changes
