@@ -34,4 +34,17 @@ pub enum ComplexError {
         /// How long the output slice is.
         answers: usize,
     },
+    /// A volume option out of range ([`crate::VolumeOptions`]).
+    #[error("volume option {option} must be {expected}, got {value}")]
+    BadVolumeOption {
+        /// The option's name.
+        option: &'static str,
+        /// What it must be.
+        expected: &'static str,
+        /// What it was.
+        value: f64,
+    },
+    /// A clipping box for volumes that is not finite or has `min > max`.
+    #[error("the box to measure volumes in must be finite with min <= max on every axis")]
+    BadVolumeBounds,
 }

@@ -6,7 +6,9 @@
 //! ray into segments owned by blocks under the priority rule
 //! ([`Complex::partition`]) and point membership ([`Complex::contains_point`]),
 //! one at a time or in parallel batches ([`Complex::classify`],
-//! [`Complex::cast_many`], [`Complex::trace_many`]).
+//! [`Complex::cast_many`], [`Complex::trace_many`]), and volumes and
+//! overlaps measured by chord lengths ([`Complex::volumes`],
+//! [`Complex::overlaps`]).
 //! Each block gets a tight, conservative box; a BVH over the bounded blocks
 //! keeps queries fast for large scenes. See `docs/complex.md`.
 #![deny(missing_docs)]
@@ -22,6 +24,7 @@ mod partition;
 mod point_grid;
 pub mod shapes;
 mod spawn;
+mod volume;
 
 pub use batch::Traces;
 pub use block::{Block, BlockId, MaterialKey, Opacity};
@@ -34,3 +37,4 @@ pub use partition::{BlockIntervals, Event, Partition, Segment, Surface};
 pub use quadric::Precision;
 pub use shapes::ShapeError;
 pub use spawn::{spawn_origin, Spawner, MARGIN as SPAWN_MARGIN};
+pub use volume::{BlockVolume, Estimate, Overlap, Overlaps, VolumeOptions, Volumes, DEFAULT_VOLUME_TOLERANCE};

@@ -403,6 +403,19 @@ impl Complex {
         }))
     }
 
+    /// The segments of the partition formed from `spans` (collected by
+    /// [`Complex::collect_spans`] with no bound: then exactly
+    /// [`Complex::segments_into`]'s), for callers that also read the spans.
+    pub(crate) fn segments_of_spans(
+        &self,
+        ray: &Ray,
+        spans: &mut BlockSpans,
+        cuts: &mut Vec<f64>,
+        out: &mut Partition,
+    ) {
+        self.partition_of_spans(ray, spans, cuts, f64::NEG_INFINITY, Events::All, out);
+    }
+
     /// [`Complex::partition_with`], with caller-provided buffers for the
     /// spans and cuts.
     fn partition_core(

@@ -14,3 +14,4 @@ mod points;
 mod secondary;
 mod stress;
 mod transparency;
+mod volume;
