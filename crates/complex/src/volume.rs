@@ -35,10 +35,11 @@ const LINES_PER_CHUNK: u64 = 512;
 const SUM_BUDGET: usize = 1 << 22;
 
 /// How fast the standard error is assumed to fall with the lines per
-/// replicate `M` when planning the next round (`SE ∝ M^(-ALPHA)`): between
-/// stratified sampling's `M^(-3/4)` (a chord length with jumps) and `M^(-1)`
-/// (a smooth one).
-const ALPHA: f64 = 0.85;
+/// replicate `M` when planning the second round (`SE ∝ M^(-ALPHA)`):
+/// between stratified sampling's `M^(-3/4)` (a chord length with jumps)
+/// and `M^(-1)` (a smooth one). Later rounds measure the rate from the
+/// last two.
+const ALPHA: f64 = 0.9;
 
 /// A shared chord of two blocks shorter than this fraction of the diagonal
 /// of their common box is rounding (two blocks that only touch), not overlap.
@@ -414,13 +415,40 @@ fn finish(g: &Grid, values: &mut [f64], stats: &mut Stats) {
     values.fill(0.0);
 }
 
-/// The lines per replicate of the next round, and whether the cap allows
-/// it: from the worst ratio of standard error to target, with `SE ∝ M^(-ALPHA)`.
-fn next_lines(per_replicate: u64, worst: f64, options: &VolumeOptions) -> (u64, bool) {
-    let grow = (worst.powf(1.0 / ALPHA) * 1.2).clamp(2.0, 64.0);
-    let want = (per_replicate as f64 * grow).ceil() as u64;
-    let cap = (options.max_lines / u64::from(options.replicates)).max(1);
-    (want.min(cap), per_replicate < cap)
+/// Plans the rounds: the lines per replicate of the next one from the
+/// worst ratio of standard error to target, with `SE ∝ M^(-α)` and `α`
+/// measured from the last two rounds (else [`ALPHA`]).
+struct Planner {
+    per_replicate: u64,
+    cap: u64,
+    last: Option<(u64, f64)>,
+}
+
+impl Planner {
+    fn new(options: &VolumeOptions) -> Planner {
+        let replicates = u64::from(options.replicates);
+        let cap = (options.max_lines / replicates).max(1);
+        Planner { per_replicate: options.initial_lines.div_ceil(replicates).clamp(1, cap), cap, last: None }
+    }
+
+    /// After a round whose worst ratio was `worst`: `Some(lines per
+    /// replicate)` for the next, or `None` if the cap was reached.
+    fn next(&mut self, worst: f64) -> Option<u64> {
+        let m = self.per_replicate;
+        let alpha = match self.last {
+            Some((m0, w0)) if w0 > worst && worst > 0.0 => {
+                ((w0 / worst).ln() / (m as f64 / m0 as f64).ln()).clamp(0.6, 1.1)
+            }
+            _ => ALPHA,
+        };
+        self.last = Some((m, worst));
+        if m >= self.cap {
+            return None;
+        }
+        let grow = (worst.powf(1.0 / alpha) * 1.1).clamp(1.5, 64.0);
+        self.per_replicate = ((m as f64 * grow).ceil() as u64).min(self.cap);
+        Some(self.per_replicate)
+    }
 }
 
 /// The quantities one round measures in a scene: each block's own volume,
@@ -485,14 +513,14 @@ impl Complex {
         let mut stats = Stats::new(q);
         let (mut lines, mut rounds, mut converged) = (0, 0, true);
         if box_vol > 0.0 {
-            let mut per_replicate = options.initial_lines.div_ceil(u64::from(options.replicates)).max(1);
+            let mut plan = Planner::new(options);
             loop {
                 stats = Stats::new(q);
                 lines = run_round(
                     &bounds,
                     options.seed.wrapping_add(u64::from(rounds) << 48),
                     options.replicates,
-                    per_replicate,
+                    plan.per_replicate,
                     q,
                     || SceneLine { spans: BlockSpans::default(), cuts: Vec::new(), partition: Partition::default() },
                     |ray, lo, hi, s, sums| self.scene_line(ray, lo, hi, s, sums),
@@ -511,12 +539,10 @@ impl Complex {
                 if worst <= 1.0 || worst.is_nan() {
                     break;
                 }
-                let (next, more) = next_lines(per_replicate, worst, options);
-                if !more {
+                if plan.next(worst).is_none() {
                     converged = false;
                     break;
                 }
-                per_replicate = next;
             }
         }
         let at = |k: usize, m: bool| m.then(|| if box_vol > 0.0 { stats.estimate(k) } else { Estimate::default() });
@@ -650,7 +676,7 @@ impl Complex {
     ) -> (Estimate, Option<Point3<f64>>, u64, bool) {
         let box_vol = box_volume(common);
         let min_chord = SHARED_CHORD_MIN * common.size().norm();
-        let mut per_replicate = options.initial_lines.div_ceil(u64::from(options.replicates)).max(1);
+        let mut plan = Planner::new(options);
         let (mut lines, mut rounds) = (0, 0u32);
         // The longest shared chord: (length, midpoint).
         type Witness = Option<(f64, Point3<f64>)>;
@@ -666,7 +692,7 @@ impl Complex {
                 common,
                 options.seed.wrapping_add(u64::from(rounds) << 48),
                 options.replicates,
-                per_replicate,
+                plan.per_replicate,
                 1,
                 || None,
                 |ray, lo, hi, w: &mut Witness, sums| {
@@ -688,11 +714,9 @@ impl Complex {
             if worst <= 1.0 || worst.is_nan() {
                 return (e, witness.map(|w| w.1), lines, true);
             }
-            let (next, more) = next_lines(per_replicate, worst, options);
-            if !more {
+            if plan.next(worst).is_none() {
                 return (e, witness.map(|w| w.1), lines, false);
             }
-            per_replicate = next;
         }
     }
 }
