@@ -49,6 +49,10 @@ enum Command {
     Bench(BenchArgs),
     /// Write a benchmark scene (JSON).
     Generate(GenerateArgs),
+    /// Measure every block's volume (owned, own) and the union's, with standard errors.
+    Volume(VolumeArgs),
+    /// List the pairs of blocks that share a positive volume.
+    Overlaps(OverlapsArgs),
 }
 
 // The argument structs carry no doc comment of their own: the variant's
@@ -182,6 +186,64 @@ struct GenerateArgs {
     output: Option<PathBuf>,
 }
 
+#[derive(clap::Args)]
+struct VolumeArgs {
+    #[command(flatten)]
+    measure: MeasureArgs,
+}
+
+#[derive(clap::Args)]
+struct OverlapsArgs {
+    #[command(flatten)]
+    measure: MeasureArgs,
+}
+
+/// The options `volume` and `overlaps` share.
+#[derive(clap::Args)]
+struct MeasureArgs {
+    /// The scene file (JSON).
+    scene: PathBuf,
+    /// Target relative standard error of every volume.
+    #[arg(long, value_name = "REL", default_value_t = render::measure::MeasureOptions::default().tolerance, allow_hyphen_values = true)]
+    tolerance: f64,
+    /// Clip everything to this box (then unbounded blocks get a volume too).
+    #[arg(long = "box", num_args = 6, value_names = ["XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"], allow_negative_numbers = true)]
+    bounds: Option<Vec<f64>>,
+    /// Seed of the random lines.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Worker threads [default: one per core].
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+    /// Output file [default: stdout].
+    #[arg(short, long, value_name = "FILE")]
+    output: Option<PathBuf>,
+}
+
+impl MeasureArgs {
+    /// The scene and the measurement options, checked (and the output
+    /// writable, the thread count set) before the scene is loaded.
+    fn prepare(&self) -> Result<(render::world::World, render::measure::MeasureOptions), Error> {
+        if let Some(p) = &self.output {
+            render::output::check_writable(p)?;
+        }
+        render::frame::set_global_threads(self.threads)?;
+        let bounds = self.bounds.as_deref().map(|b| [b[0], b[1], b[2], b[3], b[4], b[5]]);
+        let options = render::measure::MeasureOptions { tolerance: self.tolerance, seed: self.seed, bounds };
+        options.validate()?;
+        Ok((render::load(&self.scene)?, options))
+    }
+
+    /// Prints (or writes) the report as JSON or as text.
+    fn emit(&self, json: impl FnOnce() -> String, text: impl FnOnce() -> String) -> Result<(), Error> {
+        let text = if self.json { json() } else { text() };
+        write_text(self.output.as_deref(), &text)
+    }
+}
+
 /// `--threads`/`--precision`, shared by the commands that render.
 #[derive(clap::Args)]
 struct RunArgs {
@@ -284,6 +346,8 @@ fn run(command: Command) -> Result<(), Error> {
         Command::ExportPov(args) => export_pov(args),
         Command::Bench(args) => bench(args),
         Command::Generate(args) => generate(args),
+        Command::Volume(args) => volume(args),
+        Command::Overlaps(args) => overlaps(args),
     }
 }
 
@@ -490,6 +554,20 @@ fn generate(args: GenerateArgs) -> Result<(), Error> {
         Generator::Grid { count, seed } => render::generate::grid(count, seed),
     };
     write_text(args.output.as_deref(), &render::generate::to_json(&scene))
+}
+
+/// `komplex volume`: every block's volumes and the union's.
+fn volume(args: VolumeArgs) -> Result<(), Error> {
+    let (world, options) = args.measure.prepare()?;
+    let report = render::measure::volumes(&world, &options)?;
+    args.measure.emit(|| report.to_json(), || report.to_string())
+}
+
+/// `komplex overlaps`: the pairs of blocks that share a positive volume.
+fn overlaps(args: OverlapsArgs) -> Result<(), Error> {
+    let (world, options) = args.measure.prepare()?;
+    let report = render::measure::overlaps(&world, &options)?;
+    args.measure.emit(|| report.to_json(), || report.to_string())
 }
 
 /// Writes `text` to `path`, or to stdout without a path. A file is

@@ -609,9 +609,36 @@ impl Complex {
     /// assert!(scene.block(BlockId(0)).contains_point(&lens.point));
     /// ```
     pub fn overlaps(&self, options: &VolumeOptions) -> Result<Overlaps, ComplexError> {
+        self.overlaps_where(options, |_, _| true)
+    }
+
+    /// [`Complex::overlaps`] among the pairs `(a, b)` (with `a < b`) for
+    /// which `include(a, b)` holds, e.g. only pairs of opaque blocks; only
+    /// those count towards [`VolumeOptions::max_pairs`].
+    ///
+    /// ```
+    /// use complex::{Block, Complex, ComplexOptions, MaterialKey, Opacity, VolumeOptions};
+    /// use quadric::nalgebra::Vector3;
+    /// use quadric::{Quadric, Solid, Transform};
+    /// let ball = |x: f64, opacity| {
+    ///     let m = Transform::translate(Vector3::new(x, 0.0, 0.0)).unwrap();
+    ///     Block::new("ball", vec![Solid::from(Quadric::sphere().transformed(&m))], opacity, MaterialKey(0)).unwrap()
+    /// };
+    /// let scene =
+    ///     Complex::new(vec![ball(0.0, Opacity::Transparent), ball(1.0, Opacity::Opaque)], ComplexOptions::default())
+    ///         .unwrap();
+    /// let opaque = |a, b| [a, b].iter().all(|&id| !scene.block(id).is_transparent());
+    /// assert!(scene.overlaps_where(&VolumeOptions::default(), opaque).unwrap().pairs.is_empty());
+    /// assert_eq!(scene.overlaps(&VolumeOptions::default()).unwrap().pairs.len(), 1);
+    /// ```
+    pub fn overlaps_where(
+        &self,
+        options: &VolumeOptions,
+        include: impl Fn(BlockId, BlockId) -> bool,
+    ) -> Result<Overlaps, ComplexError> {
         options.check()?;
         let mut out = Overlaps { converged: true, ..Overlaps::default() };
-        let candidates = self.overlap_candidates(options.bounds, options.max_pairs);
+        let candidates = self.overlap_candidates(options.bounds, options.max_pairs, include);
         out.candidates = candidates.len();
         if candidates.len() > options.max_pairs {
             out.skipped = true;
@@ -635,9 +662,14 @@ impl Complex {
     }
 
     /// The pairs `(a, b, common box)` with `a < b` whose boxes (clipped to
-    /// `bounds`) overlap with positive volume, sorted; at most `limit + 1`
+    /// `bounds`) overlap with positive volume and `include` holds, sorted; at most `limit + 1`
     /// (a sweep along x over the boxes sorted by their lower x).
-    fn overlap_candidates(&self, bounds: Option<Aabb>, limit: usize) -> Vec<(BlockId, BlockId, Aabb)> {
+    fn overlap_candidates(
+        &self,
+        bounds: Option<Aabb>,
+        limit: usize,
+        include: impl Fn(BlockId, BlockId) -> bool,
+    ) -> Vec<(BlockId, BlockId, Aabb)> {
         let clip = bounds.unwrap_or(Aabb::INFINITE);
         let mut boxes: Vec<(u32, Aabb)> = (0..self.blocks().len() as u32)
             .map(|i| (i, self.block_aabb(BlockId(i)).intersection(&clip)))
@@ -651,8 +683,8 @@ impl Complex {
                     break;
                 }
                 let common = bi.intersection(bj);
-                if (0..3).all(|c| common.min[c] < common.max[c]) {
-                    let (a, b) = if i < j { (*i, *j) } else { (*j, *i) };
+                let (a, b) = if i < j { (*i, *j) } else { (*j, *i) };
+                if (0..3).all(|c| common.min[c] < common.max[c]) && include(BlockId(a), BlockId(b)) {
                     out.push((BlockId(a), BlockId(b), common));
                     if out.len() > limit {
                         break 'sweep;

@@ -79,6 +79,7 @@ pub fn check(world: &World) -> Report {
             }
         }
     }
+    opaque_overlaps(world, &mut warnings);
     if world.lights.is_empty() {
         warnings.push("the scene has no lights: only ambient light, reflection and refraction".into());
     }
@@ -101,6 +102,51 @@ pub fn check(world: &World) -> Report {
         epsilon: complex.epsilon(),
         size: (world.camera.width(), world.camera.height()),
         warnings,
+    }
+}
+
+/// Pairs of opaque blocks whose boxes overlap that `check` measures at
+/// most; beyond it the check is skipped (and says so).
+const MAX_OVERLAP_PAIRS: usize = 2000;
+
+/// Warns about overlapping opaque blocks: the priority rule gives the
+/// shared part to the earlier one, so their order decides what is seen.
+/// A coarse measurement (`complex::Complex::overlaps_where` with a 1 %
+/// tolerance, 2,048 lines a pair to start, at most 65,536 a round) keeps
+/// `check` fast; overlaps much smaller than a pair's common box may go
+/// unnoticed (`komplex overlaps` measures them finely).
+fn opaque_overlaps(world: &World, warnings: &mut Vec<String>) {
+    let complex = &world.complex;
+    let options = complex::VolumeOptions {
+        tolerance: 1e-2,
+        replicates: 16,
+        initial_lines: 2048,
+        max_lines: 1 << 16,
+        max_pairs: MAX_OVERLAP_PAIRS,
+        ..complex::VolumeOptions::default()
+    };
+    let opaque = |a: BlockId, b: BlockId| !complex.block(a).is_transparent() && !complex.block(b).is_transparent();
+    // The options are valid, so this cannot fail; a failure skips the check.
+    let Ok(found) = complex.overlaps_where(&options, opaque) else { return };
+    if found.skipped {
+        warnings.push(format!(
+            "overlaps between opaque blocks not checked: more than {MAX_OVERLAP_PAIRS} pairs have overlapping boxes (run komplex overlaps)"
+        ));
+    }
+    for p in &found.pairs {
+        let (a, b) = (complex.block(p.a), complex.block(p.b));
+        warnings.push(format!(
+            "opaque blocks {} \"{}\" and {} \"{}\" overlap (volume {:.3e} ± {:.1e}, e.g. at ({:.4}, {:.4}, {:.4})): the earlier one owns the overlap",
+            p.a.0 + 1,
+            a.name(),
+            p.b.0 + 1,
+            b.name(),
+            p.volume.value,
+            p.volume.error,
+            p.point.x,
+            p.point.y,
+            p.point.z
+        ));
     }
 }
 

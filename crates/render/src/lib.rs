@@ -34,6 +34,7 @@ pub mod frame;
 pub mod generate;
 pub mod limits;
 mod locate;
+pub mod measure;
 pub mod output;
 pub mod png;
 pub mod pov;
