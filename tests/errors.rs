@@ -546,6 +546,19 @@ fn bad_option_values_exit_1() {
         &["--origin/--direction: the ray direction is zero"],
     );
     check(&["check", "bad-file-name.json"], 3, &["bad-file-name.json"]);
+    check(&["volume", "ok.json", "--tolerance", "0"], 1, &["--tolerance must be a finite number > 0, got 0"]);
+    check(&["volume", "ok.json", "--tolerance", "-1e-3"], 1, &["--tolerance must be a finite number > 0, got -0.001"]);
+    check(&["overlaps", "ok.json", "--tolerance", "nan"], 1, &["--tolerance must be a finite number > 0, got NaN"]);
+    check(
+        &["volume", "ok.json", "--box", "1", "0", "0", "0", "1", "1"],
+        1,
+        &["--box must be six finite numbers XMIN YMIN ZMIN XMAX YMAX ZMAX with each min <= max, got [1.0, 0.0, 0.0, 0.0, 1.0, 1.0]"],
+    );
+    check(
+        &["volume", "ok.json", "-o", "missing/dir/v.txt"],
+        3,
+        &["missing/dir/v.txt: cannot create a file in directory"],
+    );
 }
 
 #[test]

@@ -11,6 +11,7 @@ mod determinism;
 mod errors;
 mod exr_output;
 mod interrupt;
+mod measure;
 mod mutations;
 mod shading;
 mod slice;
