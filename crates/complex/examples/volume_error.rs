@@ -4,6 +4,7 @@
 //! the fraction inside) at equal time, on shapes with known volumes.
 //!
 //! `cargo run --release -p complex --example volume_error [-- SEEDS]`
+//! `cargo run --release -p complex --example volume_error -- --coverage [SEEDS]`
 //!
 //! For each shape and line budget, the chord estimator runs one round of
 //! that many lines per seed; point sampling then gets as many points as fit
@@ -11,7 +12,9 @@
 //! timing it). Errors are root-mean-square over the seeds, relative to the
 //! exact volume; the ratio compares them at (about) equal time, so it holds
 //! up on a loaded machine. A second table gives `Complex::volumes` run to a
-//! tolerance: time, lines and the error reached.
+//! tolerance: time, lines and the error reached. With `--coverage`, how
+//! often the exact volume lies beyond one to four reported standard errors
+//! over `SEEDS` (default 1,000) runs at each of three tolerances.
 
 use std::f64::consts::PI;
 use std::time::{Duration, Instant};
@@ -93,8 +96,33 @@ fn median(mut t: Vec<Duration>) -> Duration {
     t[t.len() / 2]
 }
 
+/// How often the exact volume lies beyond 1, 2, 3 and 4 reported standard errors.
+fn coverage(seeds: u64) {
+    println!("runs beyond 1, 2, 3, 4 reported standard errors, of {seeds}");
+    for (name, solids, exact) in shapes() {
+        let block = Block::new(name, solids, Opacity::Opaque, MaterialKey(0)).expect("a valid block");
+        let c = Complex::new(vec![block], ComplexOptions::default()).expect("a valid complex");
+        for tolerance in [3e-2, 1e-3, 1e-4] {
+            let mut beyond = [0; 4];
+            for seed in 0..seeds {
+                let v = c.volumes(&VolumeOptions { tolerance, seed, ..VolumeOptions::default() }).expect("valid");
+                let e = v.blocks[0].own.expect("bounded");
+                let z = (e.value - exact).abs() / e.error;
+                for (k, b) in beyond.iter_mut().enumerate() {
+                    *b += u32::from(z > (k + 1) as f64);
+                }
+            }
+            println!("{name:<12} {tolerance:>8.0e} {beyond:?}");
+        }
+    }
+}
+
 fn main() {
-    let seeds: u64 = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(16);
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().is_some_and(|a| a == "--coverage") {
+        return coverage(args.get(1).and_then(|s| s.parse().ok()).unwrap_or(1000));
+    }
+    let seeds: u64 = args.first().and_then(|s| s.parse().ok()).unwrap_or(16);
     println!("equal time, {seeds} seeds, {} threads", rayon::current_num_threads());
     println!(
         "{:<12} {:>10} {:>10} {:>12} {:>11} {:>10} {:>12} {:>8}",
