@@ -390,7 +390,9 @@ fn run_round<S: Send>(
     // Tasks: (replicate, first line, end), fixed by the grids alone.
     let mut tasks = Vec::new();
     for (r, g) in grids.iter().enumerate() {
-        let chunks = g.lines().div_ceil(LINES_PER_CHUNK).clamp(1, max_chunks);
+        // A chunk zeroes and adds `q` sums: with many blocks, more lines a
+        // chunk keep that below a few per cent of the lines' own cost.
+        let chunks = g.lines().div_ceil(LINES_PER_CHUNK.max(q as u64 / 64)).clamp(1, max_chunks);
         let size = g.lines().div_ceil(chunks);
         let mut start = 0;
         while start < g.lines() {

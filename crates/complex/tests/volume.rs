@@ -255,3 +255,25 @@ fn unbounded_pairs_are_listed_not_measured() {
     let v = clipped.pairs[0].volume;
     assert!((v.value - 2.0).abs() <= 4.0 * v.error, "{}", v.value);
 }
+
+#[test]
+fn too_many_candidate_pairs_are_skipped_and_the_line_cap_is_reported() {
+    let c = complex(vec![
+        block("a", vec![ball(0.0, 1.0)], O, 0),
+        block("b", vec![ball(1.0, 1.0)], O, 0),
+        block("c", vec![ball(0.5, 0.5)], O, 0),
+    ]);
+    let few = VolumeOptions { max_pairs: 2, ..VolumeOptions::default() };
+    let found = c.overlaps(&few).expect("valid options");
+    assert!(found.skipped && found.pairs.is_empty() && found.candidates > 2, "{found:?}");
+    let all = c.overlaps(&VolumeOptions { max_pairs: 3, ..VolumeOptions::default() }).expect("valid options");
+    assert_eq!((all.skipped, all.candidates, all.pairs.len()), (false, 3, 3));
+    // A tolerance no round within the cap reaches: the last round, flagged.
+    let capped = VolumeOptions { tolerance: 1e-9, max_lines: 1 << 14, ..VolumeOptions::default() };
+    let v = c.volumes(&capped).expect("valid options");
+    assert!(!v.converged && v.lines <= 1 << 14 && v.rounds >= 2, "{v:?}");
+    let e = v.union.expect("bounded");
+    // The third ball lies in the first two's lens.
+    let exact_union = 2.0 * 4.0 / 3.0 * PI - 5.0 / 12.0 * PI;
+    assert!((e.value - exact_union).abs() <= 4.0 * e.error, "{} ± {}", e.value, e.error);
+}
