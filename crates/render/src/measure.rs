@@ -240,7 +240,7 @@ pub struct OverlapReport {
 pub struct OverlapsReport {
     /// The overlapping pairs, by `(a, b)`.
     pub overlaps: Vec<OverlapReport>,
-    /// Pairs whose boxes overlap: the pairs measured.
+    /// Pairs of blocks whose boxes overlap with positive volume (the candidates).
     pub candidates: usize,
     /// Pairs `[a, b]` whose common box is unbounded, not measured (give `--box`).
     pub unmeasured: Vec<[u32; 2]>,
