@@ -117,3 +117,20 @@ fn check_warns_about_overlapping_opaque_blocks_only() {
         assert_eq!(stdout.matches("overlap (").count(), usize::from(warned), "{stdout}");
     }
 }
+
+#[test]
+fn check_skips_the_overlap_test_beyond_its_pair_cap_and_says_so() {
+    // 70 balls at one place: 2,415 pairs of opaque blocks with overlapping boxes.
+    let balls: Vec<String> =
+        (0..70).map(|i| format!(r#"{{ "name": "b{i}", "objects": [ {{ "sphere": {{}} }} ] }}"#)).collect();
+    let text = format!(
+        r#"{{ "camera": {{ "eye": [0, 0, 9], "direction": [0, 0, -1], "width": 8, "height": 6 }}, "blocks": [ {} ] }}"#,
+        balls.join(", ")
+    );
+    let dir = tempdir();
+    let scene = write_scene(dir.path(), "many.json", &text);
+    let out = komplex_ok(dir.path(), &["check", scene.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("overlaps between opaque blocks not checked: more than 2000 pairs"), "{stdout}");
+    assert!(!stdout.contains("overlap ("), "{stdout}");
+}
