@@ -365,7 +365,7 @@ impl Stats {
     }
 }
 
-/// Runs `replicates` replicates of about `per_replicate` lines across the
+/// Runs `replicates` replicates of at most `per_replicate` lines across the
 /// bounded box `b`: `line(ray, lo, hi, scratch, sums)` adds a line's chords
 /// (within `[lo, hi]`, the part of the ray in the box) to `q` sums. The
 /// replicates' estimates go into `stats`; each chunk's scratch is handed to
@@ -434,7 +434,7 @@ fn run_round<S: Send>(
     lines
 }
 
-/// A replicate's sums of chords times the cell area: its estimates.
+/// A replicate's sums of chords times the area per line: its estimates.
 fn finish(g: &Grid, values: &mut [f64], stats: &mut Stats) {
     let area = g.cell_area();
     for v in values.iter_mut() {
