@@ -1,0 +1,330 @@
+//! `komplex`: the Komplex kernel and renderer from Python, in numpy batches.
+//!
+//! A [`Scene`] is a loaded scene file (the same JSON and the same errors as
+//! the command line). Its queries take `(N, 3)` arrays and answer with
+//! numpy arrays, the GIL released while the kernel's batch queries
+//! (`complex::Complex::classify`, `cast_many`, `trace_many`) run on every
+//! core. See docs/python.md.
+
+use std::path::PathBuf;
+use std::sync::RwLock;
+
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use render::world::World;
+
+mod arrays;
+
+pyo3::create_exception!(
+    komplex,
+    SceneError,
+    PyValueError,
+    "A scene file that cannot be loaded: the message names the place (JSON path, line and column), as the command line does."
+);
+
+/// A Python exception for a failure of the `render` crate: a bad scene is a
+/// [`SceneError`], bad options a `ValueError`, a missing file an `OSError`.
+fn to_py(e: render::Error) -> PyErr {
+    match &e {
+        render::Error::Scene { .. } => SceneError::new_err(e.to_string()),
+        render::Error::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
+            PyFileNotFoundError::new_err(e.to_string())
+        }
+        render::Error::Io { .. } | render::Error::Encode { .. } => PyOSError::new_err(e.to_string()),
+        render::Error::Options(_) | render::Error::Interrupted => PyValueError::new_err(e.to_string()),
+    }
+}
+
+/// Reads a scene file (JSON); raises `SceneError` for a bad scene.
+#[pyfunction]
+fn load(py: Python<'_>, path: PathBuf) -> PyResult<Scene> {
+    let world = py.detach(|| render::load(&path)).map_err(to_py)?;
+    Ok(Scene::new(world))
+}
+
+/// Reads a scene from JSON text; raises `SceneError` for a bad scene.
+#[pyfunction]
+fn loads(py: Python<'_>, json: &str) -> PyResult<Scene> {
+    let world = py
+        .detach(|| render::format::SceneFile::load_str(json))
+        .map_err(|source| to_py(render::Error::Scene { file: PathBuf::from("<string>"), source }))?;
+    Ok(Scene::new(world))
+}
+
+/// A loaded scene: its blocks under the priority rule, camera, lights and
+/// materials.
+#[pyclass(frozen, module = "komplex")]
+struct Scene {
+    /// Read-locked by every query; write-locked only by a render that
+    /// changes the camera's size or the precision for its duration.
+    world: RwLock<World>,
+}
+
+impl Scene {
+    fn new(world: World) -> Self {
+        Scene { world: RwLock::new(world) }
+    }
+
+    fn world(&self) -> std::sync::RwLockReadGuard<'_, World> {
+        // A panic under the lock (none is expected) leaves the world whole:
+        // every write restores what it changed first.
+        self.world.read().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+/// The first hits of a batch of rays (`Scene.cast`).
+#[pyclass(frozen, module = "komplex")]
+struct Hits {
+    /// Distance along the (normalised) ray, `inf` where nothing is hit.
+    #[pyo3(get)]
+    t: Py<PyArray1<f64>>,
+    /// 1-based block hit, `0` where nothing is hit.
+    #[pyo3(get)]
+    block: Py<PyArray1<u32>>,
+    /// 1-based solid of that block, `0` where nothing is hit.
+    #[pyo3(get)]
+    solid: Py<PyArray1<u32>>,
+    /// `(N, 3)` hit points, `nan` where nothing is hit.
+    #[pyo3(get)]
+    point: Py<PyArray2<f64>>,
+    /// `(N, 3)` outward unit normals of the hit block, `nan` where nothing is hit.
+    #[pyo3(get)]
+    normal: Py<PyArray2<f64>>,
+    /// Whether the ray enters the block there (else it leaves it).
+    #[pyo3(get)]
+    entering: Py<PyArray1<bool>>,
+}
+
+/// Every ray's partition into segments owned by one block or none
+/// (`Scene.trace`): ray `i`'s segments are `offsets[i]:offsets[i + 1]`.
+#[pyclass(frozen, module = "komplex")]
+struct Traces {
+    /// `(N + 1,)` start of each ray's segments in the flat arrays.
+    #[pyo3(get)]
+    offsets: Py<PyArray1<i64>>,
+    /// Where each segment starts along its ray.
+    #[pyo3(get)]
+    start: Py<PyArray1<f64>>,
+    /// Where it ends (`inf` for a ray's last one).
+    #[pyo3(get)]
+    end: Py<PyArray1<f64>>,
+    /// 1-based owning block, `0` for empty space.
+    #[pyo3(get)]
+    block: Py<PyArray1<u32>>,
+}
+
+#[pymethods]
+impl Traces {
+    fn __len__(&self, py: Python<'_>) -> usize {
+        self.offsets.bind(py).len().saturating_sub(1)
+    }
+}
+
+#[pymethods]
+impl Hits {
+    fn __len__(&self, py: Python<'_>) -> usize {
+        self.t.bind(py).len()
+    }
+}
+
+/// `BlockId` as the 1-based index of the EXR `id.block` channel, 0 for none.
+fn one_based(id: Option<complex::BlockId>) -> u32 {
+    id.map_or(0, |b| b.0 + 1)
+}
+
+#[pymethods]
+impl Scene {
+    /// The owner of each point under the priority rule: `(N,)` uint32 of
+    /// 1-based block indices, `0` outside every block.
+    fn classify<'py>(&self, py: Python<'py>, points: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<u32>>> {
+        let points = arrays::points(py, points)?;
+        let world = self.world();
+        let owners = py.detach(|| {
+            let mut out = vec![None; points.len()];
+            world.complex.classify(&points, &mut out).map(|()| out.into_iter().map(one_based).collect::<Vec<u32>>())
+        });
+        let owners = owners.map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok(owners.into_pyarray(py))
+    }
+
+    /// The first hit of each ray within `max_t` (directions are normalised).
+    #[pyo3(signature = (origins, directions, max_t = f64::INFINITY))]
+    fn cast(
+        &self,
+        py: Python<'_>,
+        origins: &Bound<'_, PyAny>,
+        directions: &Bound<'_, PyAny>,
+        max_t: f64,
+    ) -> PyResult<Hits> {
+        if max_t.is_nan() || max_t < 0.0 {
+            return Err(PyValueError::new_err(format!("max_t must be a number >= 0, got {max_t}")));
+        }
+        let rays = arrays::rays(py, origins, directions)?;
+        let world = self.world();
+        let hits = py
+            .detach(|| {
+                let mut out = vec![None; rays.len()];
+                world.complex.cast_many(&rays, max_t, &mut out).map(|()| out)
+            })
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let n = hits.len();
+        let (mut t, mut block, mut solid) = (vec![f64::INFINITY; n], vec![0u32; n], vec![0u32; n]);
+        let (mut point, mut normal, mut entering) = (vec![f64::NAN; 3 * n], vec![f64::NAN; 3 * n], vec![false; n]);
+        for (i, h) in hits.iter().enumerate() {
+            let Some(h) = h else { continue };
+            t[i] = h.t;
+            block[i] = h.block.0 + 1;
+            solid[i] = h.solid + 1;
+            point[3 * i..3 * i + 3].copy_from_slice(h.point.coords.as_slice());
+            normal[3 * i..3 * i + 3].copy_from_slice(h.normal.as_slice());
+            entering[i] = h.entering;
+        }
+        let matrix = |v: Vec<f64>| -> PyResult<Py<PyArray2<f64>>> { Ok(v.into_pyarray(py).reshape([n, 3])?.unbind()) };
+        Ok(Hits {
+            t: t.into_pyarray(py).unbind(),
+            block: block.into_pyarray(py).unbind(),
+            solid: solid.into_pyarray(py).unbind(),
+            point: matrix(point)?,
+            normal: matrix(normal)?,
+            entering: entering.into_pyarray(py).unbind(),
+        })
+    }
+
+    /// Each ray's partition into segments, ragged (directions are normalised).
+    fn trace(&self, py: Python<'_>, origins: &Bound<'_, PyAny>, directions: &Bound<'_, PyAny>) -> PyResult<Traces> {
+        let rays = arrays::rays(py, origins, directions)?;
+        let world = self.world();
+        let traces = py.detach(|| {
+            let mut traces = complex::Traces::new();
+            world.complex.trace_many(&rays, &mut traces);
+            traces
+        });
+        let segments = traces.segments();
+        Ok(Traces {
+            offsets: traces.offsets().iter().map(|&o| o as i64).collect::<Vec<_>>().into_pyarray(py).unbind(),
+            start: segments.iter().map(|s| s.start).collect::<Vec<_>>().into_pyarray(py).unbind(),
+            end: segments.iter().map(|s| s.end).collect::<Vec<_>>().into_pyarray(py).unbind(),
+            block: segments.iter().map(|s| one_based(s.owner)).collect::<Vec<_>>().into_pyarray(py).unbind(),
+        })
+    }
+
+    /// Renders the scene's camera view (Whitted shading, as `komplex
+    /// render`) and returns the EXR channels as `(height, width)` arrays:
+    /// `R G B A Z N.X N.Y N.Z` float32 and `id.block id.object` uint32.
+    #[pyo3(signature = (width = None, height = None, samples = None, threads = None, precision = None))]
+    fn render<'py>(
+        &self,
+        py: Python<'py>,
+        width: Option<u32>,
+        height: Option<u32>,
+        samples: Option<u32>,
+        threads: Option<usize>,
+        precision: Option<&str>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let precision = precision
+            .map(|p| match p {
+                "fast" => Ok(complex::Precision::Fast),
+                "accurate" => Ok(complex::Precision::Accurate),
+                "certified" => Ok(complex::Precision::Certified),
+                other => Err(PyValueError::new_err(format!(
+                    "precision must be 'fast', 'accurate' or 'certified', got {other:?}"
+                ))),
+            })
+            .transpose()?;
+        if let Some(n) = samples {
+            if !(1..=16).contains(&n) {
+                return Err(PyValueError::new_err(format!("samples must be between 1 and 16, got {n}")));
+            }
+        }
+        let frame = py.detach(|| -> Result<render::frame::Frame, render::Error> {
+            let options = render::frame::Options { threads, colour_only: false };
+            let plain = width.is_none() && height.is_none() && samples.is_none() && precision.is_none();
+            if plain {
+                return render::frame::render(&self.world(), options, &|| {}).map(|(f, _)| f);
+            }
+            // Changed for this render only, under the write lock.
+            let mut world = self.world.write().unwrap_or_else(|e| e.into_inner());
+            let camera = world
+                .camera
+                .resized(width, height)
+                .map_err(|e| render::Error::Options(format!("width/height: {e}")))?;
+            let saved = (world.camera, world.settings.samples, world.complex.precision());
+            world.camera = camera;
+            world.settings.samples = samples.unwrap_or(saved.1);
+            world.complex.set_precision(precision.unwrap_or(saved.2));
+            let result = render::frame::render(&world, options, &|| {}).map(|(f, _)| f);
+            world.camera = saved.0;
+            world.settings.samples = saved.1;
+            world.complex.set_precision(saved.2);
+            result
+        });
+        let frame = frame.map_err(to_py)?;
+        let (h, w) = (frame.height as usize, frame.width as usize);
+        let out = PyDict::new(py);
+        let render::frame::Frame { rgb: [r, g, b], alpha, depth, normal: [nx, ny, nz], block, object, .. } = frame;
+        for (name, plane) in
+            [("R", r), ("G", g), ("B", b), ("A", alpha), ("Z", depth), ("N.X", nx), ("N.Y", ny), ("N.Z", nz)]
+        {
+            out.set_item(name, plane.into_pyarray(py).reshape([h, w])?)?;
+        }
+        out.set_item("id.block", block.into_pyarray(py).reshape([h, w])?)?;
+        out.set_item("id.object", object.into_pyarray(py).reshape([h, w])?)?;
+        Ok(out)
+    }
+
+    /// The blocks in priority order: dicts with `index` (1-based, as
+    /// `classify` and `id.block`), `name`, `material` (its name),
+    /// `transparent`, and `box` (`(min, max)` corners, `±inf` on unbounded
+    /// axes; `None` for a block shown to be empty).
+    #[getter]
+    fn blocks<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let world = self.world();
+        let list = PyList::empty(py);
+        for (i, (block, info)) in world.complex.blocks().iter().zip(world.blocks()).enumerate() {
+            let d = PyDict::new(py);
+            d.set_item("index", i + 1)?;
+            d.set_item("name", block.name())?;
+            d.set_item("material", &world.materials()[info.material].name)?;
+            d.set_item("transparent", block.is_transparent())?;
+            let bx = world.complex.block_aabb(complex::BlockId(i as u32));
+            if bx.is_empty() {
+                d.set_item("box", py.None())?;
+            } else {
+                let corner = |p: &quadric::nalgebra::Point3<f64>| (p.x, p.y, p.z);
+                d.set_item("box", (corner(&bx.min), corner(&bx.max)))?;
+            }
+            list.append(d)?;
+        }
+        Ok(list)
+    }
+
+    /// The number of blocks.
+    fn __len__(&self) -> usize {
+        self.world().complex.blocks().len()
+    }
+
+    fn __repr__(&self) -> String {
+        let world = self.world();
+        format!(
+            "<komplex.Scene: {} blocks, {}x{} camera>",
+            world.complex.blocks().len(),
+            world.camera.width(),
+            world.camera.height()
+        )
+    }
+}
+
+/// The Komplex kernel and renderer from Python.
+#[pymodule]
+fn komplex(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(load, m)?)?;
+    m.add_function(wrap_pyfunction!(loads, m)?)?;
+    m.add_class::<Scene>()?;
+    m.add_class::<Hits>()?;
+    m.add_class::<Traces>()?;
+    m.add("SceneError", m.py().get_type::<SceneError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
