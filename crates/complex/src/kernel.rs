@@ -230,7 +230,7 @@ impl Kernel {
     }
 
     /// Solid `i` of the block in slot `k`, if the slot is packed.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn solid(&self, k: u32, i: u32) -> Option<SolidRef<'_>> {
         let slot = self.slots[k as usize];
         if i >= slot.count {
