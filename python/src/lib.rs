@@ -13,6 +13,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMetho
 use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
+use rayon::prelude::*;
 use render::world::World;
 
 mod arrays;
@@ -33,7 +34,9 @@ fn to_py(e: render::Error) -> PyErr {
             PyFileNotFoundError::new_err(e.to_string())
         }
         render::Error::Io { .. } | render::Error::Encode { .. } => PyOSError::new_err(e.to_string()),
-        render::Error::Options(_) | render::Error::Interrupted => PyValueError::new_err(e.to_string()),
+        render::Error::Options(_) | render::Error::Data { .. } | render::Error::Interrupted => {
+            PyValueError::new_err(e.to_string())
+        }
     }
 }
 
@@ -129,6 +132,23 @@ impl Hits {
     }
 }
 
+/// Rays per parallel task: `Complex::cast_many`'s chunk.
+const CHUNK: usize = 256;
+/// Points per parallel task: `Complex::classify`'s chunk.
+const POINT_CHUNK: usize = 1024;
+
+/// `ValueError` unless origins and directions have as many rows.
+fn same_length(origins: &[f64], directions: &[f64]) -> PyResult<()> {
+    if origins.len() == directions.len() {
+        return Ok(());
+    }
+    Err(PyValueError::new_err(format!(
+        "origins and directions must have the same length, got {} and {}",
+        origins.len() / 3,
+        directions.len() / 3
+    )))
+}
+
 /// `BlockId` as the 1-based index of the EXR `id.block` channel, 0 for none.
 fn one_based(id: Option<complex::BlockId>) -> u32 {
     id.map_or(0, |b| b.0 + 1)
@@ -139,13 +159,28 @@ impl Scene {
     /// The owner of each point under the priority rule: `(N,)` uint32 of
     /// 1-based block indices, `0` outside every block.
     fn classify<'py>(&self, py: Python<'py>, points: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<u32>>> {
-        let points = arrays::points(py, points)?;
+        let array = arrays::rows3(py, points, "points")?;
+        let flat = arrays::flat(&array)?;
         let world = self.world();
-        let owners = py.detach(|| {
-            let mut out = vec![None; points.len()];
-            world.complex.classify(&points, &mut out).map(|()| out.into_iter().map(one_based).collect::<Vec<u32>>())
+        let complex = &world.complex;
+        let bad = arrays::FirstBad::new();
+        let mut owners = vec![0u32; flat.len() / 3];
+        // `Complex::classify`'s loop, reading the numpy buffer and writing
+        // the answer array in place (no copy of either).
+        py.detach(|| {
+            owners.par_chunks_mut(POINT_CHUNK).enumerate().for_each(|(c, out)| {
+                for (k, o) in out.iter_mut().enumerate() {
+                    let p = arrays::point(flat, c * POINT_CHUNK + k);
+                    if !p.iter().all(|x| x.is_finite()) {
+                        bad.report(c * POINT_CHUNK + k);
+                    }
+                    *o = one_based(complex.contains_point(&p));
+                }
+            })
         });
-        let owners = owners.map_err(|e| PyValueError::new_err(e.to_string()))?;
+        if let Some(i) = bad.get() {
+            return Err(arrays::not_finite("points", flat, i));
+        }
         Ok(owners.into_pyarray(py))
     }
 
@@ -161,25 +196,62 @@ impl Scene {
         if max_t.is_nan() || max_t < 0.0 {
             return Err(PyValueError::new_err(format!("max_t must be a number >= 0, got {max_t}")));
         }
-        let rays = arrays::rays(py, origins, directions)?;
+        let (origins, directions) =
+            (arrays::rows3(py, origins, "origins")?, arrays::rows3(py, directions, "directions")?);
+        let (o, d) = (arrays::flat(&origins)?, arrays::flat(&directions)?);
+        same_length(o, d)?;
+        let n = o.len() / 3;
         let world = self.world();
-        let hits = py
-            .detach(|| {
-                let mut out = vec![None; rays.len()];
-                world.complex.cast_many(&rays, max_t, &mut out).map(|()| out)
-            })
-            .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        let n = hits.len();
-        let (mut t, mut block, mut solid) = (vec![f64::INFINITY; n], vec![0u32; n], vec![0u32; n]);
-        let (mut point, mut normal, mut entering) = (vec![f64::NAN; 3 * n], vec![f64::NAN; 3 * n], vec![false; n]);
-        for (i, h) in hits.iter().enumerate() {
-            let Some(h) = h else { continue };
-            t[i] = h.t;
-            block[i] = h.block.0 + 1;
-            solid[i] = h.solid + 1;
-            point[3 * i..3 * i + 3].copy_from_slice(h.point.coords.as_slice());
-            normal[3 * i..3 * i + 3].copy_from_slice(h.normal.as_slice());
-            entering[i] = h.entering;
+        let complex = &world.complex;
+        let bad = arrays::FirstBad::new();
+        // Zeroed (pages mapped lazily); every entry is written below, by
+        // the worker that casts its ray.
+        let (mut t, mut block, mut solid) = (vec![0.0f64; n], vec![0u32; n], vec![0u32; n]);
+        let (mut point, mut normal, mut entering) = (vec![0.0f64; 3 * n], vec![0.0f64; 3 * n], vec![false; n]);
+        // `Complex::cast_many` a chunk at a time, each chunk's answers
+        // written straight into the output arrays.
+        py.detach(|| {
+            let columns = t.par_chunks_mut(CHUNK).zip(block.par_chunks_mut(CHUNK)).zip(solid.par_chunks_mut(CHUNK));
+            let rows = point.par_chunks_mut(3 * CHUNK).zip(normal.par_chunks_mut(3 * CHUNK));
+            columns.zip(rows).zip(entering.par_chunks_mut(CHUNK)).enumerate().for_each_init(
+                || (Vec::with_capacity(CHUNK), Vec::with_capacity(CHUNK)),
+                |(rays, hits), (c, ((((t, block), solid), (point, normal)), entering))| {
+                    let start = c * CHUNK;
+                    rays.clear();
+                    for i in start..start + t.len() {
+                        match arrays::ray(o, d, i) {
+                            Some(r) => rays.push(r),
+                            None => return bad.report(i),
+                        }
+                    }
+                    hits.clear();
+                    hits.resize(rays.len(), None);
+                    if complex.cast_many(rays, max_t, hits).is_err() {
+                        return; // equal lengths: cannot happen
+                    }
+                    for (k, h) in hits.iter().enumerate() {
+                        let (p, nm) = (&mut point[3 * k..3 * k + 3], &mut normal[3 * k..3 * k + 3]);
+                        match h {
+                            Some(h) => {
+                                t[k] = h.t;
+                                block[k] = h.block.0 + 1;
+                                solid[k] = h.solid + 1;
+                                p.copy_from_slice(h.point.coords.as_slice());
+                                nm.copy_from_slice(h.normal.as_slice());
+                                entering[k] = h.entering;
+                            }
+                            None => {
+                                t[k] = f64::INFINITY;
+                                p.fill(f64::NAN);
+                                nm.fill(f64::NAN);
+                            }
+                        }
+                    }
+                },
+            )
+        });
+        if let Some(i) = bad.get() {
+            return Err(arrays::bad_ray(o, d, i));
         }
         let matrix = |v: Vec<f64>| -> PyResult<Py<PyArray2<f64>>> { Ok(v.into_pyarray(py).reshape([n, 3])?.unbind()) };
         Ok(Hits {
@@ -194,7 +266,16 @@ impl Scene {
 
     /// Each ray's partition into segments, ragged (directions are normalised).
     fn trace(&self, py: Python<'_>, origins: &Bound<'_, PyAny>, directions: &Bound<'_, PyAny>) -> PyResult<Traces> {
-        let rays = arrays::rays(py, origins, directions)?;
+        let (origins, directions) =
+            (arrays::rows3(py, origins, "origins")?, arrays::rows3(py, directions, "directions")?);
+        let (o, d) = (arrays::flat(&origins)?, arrays::flat(&directions)?);
+        same_length(o, d)?;
+        let rays: Vec<Option<quadric::Ray>> =
+            py.detach(|| (0..o.len() / 3).into_par_iter().map(|i| arrays::ray(o, d, i)).collect());
+        if let Some(i) = rays.iter().position(Option::is_none) {
+            return Err(arrays::bad_ray(o, d, i));
+        }
+        let rays: Vec<quadric::Ray> = rays.into_iter().flatten().collect();
         let world = self.world();
         let traces = py.detach(|| {
             let mut traces = complex::Traces::new();
@@ -274,6 +355,38 @@ impl Scene {
         Ok(out)
     }
 
+    /// Every block's volume as the complex owns it, its own volume and the
+    /// union's, each with its standard error: `komplex volume --json` as
+    /// Python data. `box` is `(xmin, ymin, zmin, xmax, ymax, zmax)`.
+    #[pyo3(signature = (tolerance = complex::DEFAULT_VOLUME_TOLERANCE, seed = 0, r#box = None))]
+    fn volumes<'py>(
+        &self,
+        py: Python<'py>,
+        tolerance: f64,
+        seed: u64,
+        r#box: Option<[f64; 6]>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let options = render::measure::MeasureOptions { tolerance, seed, bounds: r#box };
+        let json = py.detach(|| render::measure::volumes(&self.world(), &options).map(|r| r.to_json()));
+        from_json(py, &json.map_err(to_py)?)
+    }
+
+    /// Every pair of blocks whose own regions share a positive volume, with
+    /// the volume, its error and a point inside both: `komplex overlaps
+    /// --json` as Python data.
+    #[pyo3(signature = (tolerance = complex::DEFAULT_VOLUME_TOLERANCE, seed = 0, r#box = None))]
+    fn overlaps<'py>(
+        &self,
+        py: Python<'py>,
+        tolerance: f64,
+        seed: u64,
+        r#box: Option<[f64; 6]>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let options = render::measure::MeasureOptions { tolerance, seed, bounds: r#box };
+        let json = py.detach(|| render::measure::overlaps(&self.world(), &options).map(|r| r.to_json()));
+        from_json(py, &json.map_err(to_py)?)
+    }
+
     /// The blocks in priority order: dicts with `index` (1-based, as
     /// `classify` and `id.block`), `name`, `material` (its name),
     /// `transparent`, and `box` (`(min, max)` corners, `±inf` on unbounded
@@ -314,6 +427,11 @@ impl Scene {
             world.camera.height()
         )
     }
+}
+
+/// `json.loads(text)`: the command line's JSON report as Python data.
+fn from_json<'py>(py: Python<'py>, text: &str) -> PyResult<Bound<'py, PyAny>> {
+    py.import("json")?.call_method1("loads", (text,))
 }
 
 /// The Komplex kernel and renderer from Python.

@@ -253,3 +253,33 @@ def test_queries_from_many_threads_agree(balls):
     for t in threads:
         t.join()
     assert all(np.array_equal(r, want) for r in results)
+
+
+def test_volumes_against_analytic_values_and_the_command_line(balls, cli, tmp_path):
+    ball, lens, post = 4 / 3 * math.pi * 1.5**3, 4 / 3 * math.pi * 8, math.pi * 0.25 * 2
+    # The lens of the ball (r 1.5) and the transparent sphere (r 2), centres 1.5 apart.
+    shared = math.pi * (1.5 + 2 - 1.5) ** 2 * (1.5**2 + 2 * 1.5 * 3.5 - 3 * 0.5**2) / (12 * 1.5)
+    got = balls.volumes(tolerance=1e-3)
+    want_owned = [ball, lens - shared, post]
+    want_own = [ball, lens, post]
+    for b, owned, own in zip(got["blocks"], want_owned, want_own):
+        assert b["bounded"] and abs(b["volume"] - owned) <= 4 * b["error"] + 1e-12, (b, owned)
+        assert abs(b["own_volume"] - own) <= 4 * b["own_error"] + 1e-12, (b, own)
+    union = got["union"]
+    assert abs(union["volume"] - (ball + lens - shared + post)) <= 4 * union["error"]
+    scene = tmp_path / "balls.json"
+    scene.write_text(BALLS)
+    run = subprocess.run([str(cli), "volume", str(scene), "--json", "--tolerance", "1e-3"], capture_output=True, text=True, check=True)
+    assert json.loads(run.stdout) == got
+    with pytest.raises(ValueError, match="tolerance"):
+        balls.volumes(tolerance=0)
+
+
+def test_overlaps_find_the_lens(balls):
+    got = balls.overlaps(tolerance=1e-3)
+    assert [(o["a"], o["b"]) for o in got["overlaps"]] == [(1, 2)]
+    o = got["overlaps"][0]
+    shared = math.pi * 2**2 * (1.5**2 + 2 * 1.5 * 3.5 - 3 * 0.5**2) / (12 * 1.5)
+    assert abs(o["volume"] - shared) <= 4 * o["error"]
+    x, y, z = o["point"]
+    assert x * x + y * y + z * z <= 1.5**2 and (x - 1.5) ** 2 + y * y + z * z <= 4
