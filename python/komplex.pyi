@@ -75,6 +75,18 @@ class Scene:
     def trace(self, origins: ArrayLike, directions: ArrayLike) -> Traces:
         """Each ray's partition into segments owned by one block or none,
         from ``t = 0`` to ``inf``."""
+    def volumes(
+        self, tolerance: float = 1e-3, seed: int = 0, box: Optional[Tuple[float, float, float, float, float, float]] = None
+    ) -> dict:
+        """Every block's volume as the complex owns it, its own volume and
+        the union's, with standard errors: ``komplex volume --json`` as
+        Python data (docs/geometry.md)."""
+    def overlaps(
+        self, tolerance: float = 1e-3, seed: int = 0, box: Optional[Tuple[float, float, float, float, float, float]] = None
+    ) -> dict:
+        """Every pair of blocks whose own regions share a positive volume,
+        with the volume, its error and a point inside both: ``komplex
+        overlaps --json`` as Python data."""
     def render(
         self,
         width: Optional[int] = None,
