@@ -25,6 +25,8 @@
 pub mod bench;
 pub mod camera;
 pub mod check;
+#[cfg(test)]
+mod chi_square;
 mod convert;
 mod error;
 pub mod exr;
@@ -39,9 +41,11 @@ pub mod output;
 pub mod png;
 pub mod pov;
 pub mod rays;
+pub mod sampling;
 pub mod shade;
 pub mod slice;
 pub mod trace;
+pub mod warp;
 pub mod world;
 
 /// The kernel's precision modes: `quadric`'s type, re-exported (one type, documented there).
