@@ -23,6 +23,7 @@
 #![deny(missing_docs)]
 
 pub mod bench;
+pub mod bsdf;
 pub mod camera;
 pub mod check;
 #[cfg(test)]
