@@ -4,7 +4,9 @@
 //! the world it converts into ([`world`], by [`load`] or
 //! `SceneFile::to_world`), the camera of docs/model.md §4 ([`camera`]),
 //! Whitted-style shading of docs/model.md §5 ([`shade`]), the parallel render loop
-//! ([`frame`]) and the OpenEXR and PNG writers ([`exr`], [`png`]). Only this
+//! ([`frame`]) and the OpenEXR and PNG writers ([`exr`], [`png`]). The path
+//! tracer's building blocks of docs/model.md §5.8 are [`sampling`] (random
+//! numbers), [`warp`] (warps and their densities) and [`bsdf`] (the lobes). Only this
 //! crate knows JSON and image formats; the kernel crates `quadric` and
 //! `complex` stay plain geometry.
 //!
