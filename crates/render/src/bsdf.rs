@@ -293,33 +293,21 @@ mod tests {
     fn glossy_samples_follow_their_pdf_and_the_pdf_integrates_to_one() {
         for bsdf in glossy() {
             for wo in incident() {
-                if matches!(bsdf, Bsdf::BlinnPhong { .. }) && wo.z.abs() < 0.5 {
-                    // The density has an integrable 1/|wo·h| peak at
-                    // wi = −wo, which Simpson cannot integrate on the grid;
-                    // grazing Blinn-Phong is covered by the finer test below.
-                    continue;
-                }
-                let o = test_directions(|wi| bsdf.pdf(&wo, wi), |u| bsdf.sample(&wo, u, 0.5).map(|s| s.wi), 50_000, 7);
-                assert!((o.mass - 1.0).abs() < 3e-3, "{bsdf:?} at {wo:?}: ∫pdf = {}", o.mass);
+                // Blinn-Phong's density has an integrable 1/|wo·h| peak at
+                // wi = −wo (h ⊥ wo), which grazing lobes reach: the grid is
+                // centred on it.
+                let pole = if matches!(bsdf, Bsdf::BlinnPhong { .. }) { -wo } else { Vector3::z() };
+                let o = test_directions(
+                    &pole,
+                    |wi| bsdf.pdf(&wo, wi),
+                    |u| bsdf.sample(&wo, u, 0.5).map(|s| s.wi),
+                    50_000,
+                    7,
+                );
+                assert!((o.mass - 1.0).abs() < 1e-4, "{bsdf:?} at {wo:?}: ∫pdf = {}", o.mass);
                 assert_eq!(o.failed, 0);
                 assert!(o.p > ALPHA, "{bsdf:?} at {wo:?}: p = {}", o.p);
             }
-        }
-    }
-
-    #[test]
-    fn grazing_blinn_phong_samples_follow_its_pdf() {
-        // The density has a 1/|wo·h| peak at wi = −wo, on the far side of
-        // the surface (f = 0 there), which adaptive Simpson underestimates:
-        // the mass is checked more loosely. Sharper lobes are left out: at
-        // 80° and p = 60 the peak's one cell draws 8 % of the samples and
-        // its integral is 30 % short.
-        for p in [1.0, 10.0] {
-            let bsdf = Bsdf::BlinnPhong { shininess: p };
-            let wo = incident()[6];
-            let o = test_directions(|wi| bsdf.pdf(&wo, wi), |u| bsdf.sample(&wo, u, 0.5).map(|s| s.wi), 50_000, 8);
-            assert!((o.mass - 1.0).abs() < 2e-2, "{bsdf:?}: ∫pdf = {}", o.mass);
-            assert!(o.p > ALPHA, "{bsdf:?}: p = {}", o.p);
         }
     }
 
@@ -360,10 +348,10 @@ mod tests {
         for bsdf in glossy() {
             for wo in incident() {
                 let albedo = integrate_sphere(|wi| bsdf.eval(&wo, wi) * wi.z.abs());
-                assert!(albedo <= 1.0 + 2e-3, "{bsdf:?} at {wo:?}: albedo {albedo}");
+                assert!(albedo <= 1.0 + 1e-4, "{bsdf:?} at {wo:?}: albedo {albedo}");
                 let exact = matches!(bsdf, Bsdf::Diffuse) || (matches!(bsdf, Bsdf::Phong { .. }) && wo.z.abs() == 1.0);
                 if exact {
-                    assert!((albedo - 1.0).abs() < 2e-3, "{bsdf:?} at {wo:?}: albedo {albedo}");
+                    assert!((albedo - 1.0).abs() < 1e-4, "{bsdf:?} at {wo:?}: albedo {albedo}");
                 }
             }
         }
@@ -385,7 +373,7 @@ mod tests {
             let mean = weights.iter().sum::<f64>() / n as f64;
             let sd = (weights.iter().map(|w| (w - mean).powi(2)).sum::<f64>() / (n * (n - 1)) as f64).sqrt();
             let albedo = integrate_sphere(|wi| bsdf.eval(&wo, wi) * wi.z.abs());
-            assert!((mean - albedo).abs() < 5.0 * sd + 2e-3, "{bsdf:?}: {mean} ± {sd} against {albedo}");
+            assert!((mean - albedo).abs() < 5.0 * sd + 1e-4, "{bsdf:?}: {mean} ± {sd} against {albedo}");
         }
     }
 
