@@ -213,8 +213,9 @@ impl Bsdf {
 
     /// Draws `wi` for `wo` from two uniform numbers `u` (the direction) and
     /// one `uc` (the choice between reflection and refraction of a
-    /// dielectric). `None` where no direction can be drawn (`wo` in the
-    /// tangent plane for a lobe that needs a side).
+    /// dielectric). `None` where no direction can be drawn: `wo` in the
+    /// tangent plane, for every lobe but Phong (whose lobe around the
+    /// tangent mirror direction still reaches above the surface).
     pub fn sample(&self, wo: &Vector3<f64>, u: [f64; 2], uc: f64) -> Option<BsdfSample> {
         let glossy =
             |wi: Vector3<f64>| Some(BsdfSample { wi, f: self.eval(wo, &wi), pdf: self.pdf(wo, &wi), delta: false });
@@ -237,6 +238,8 @@ impl Bsdf {
                 let wi = 2.0 * wo.dot(&h) * h - wo;
                 glossy(wi.normalize())
             }
+            // A tangent wo has no mirror direction off the surface.
+            Bsdf::Mirror | Bsdf::Dielectric { .. } if wo.z == 0.0 => None,
             Bsdf::Mirror => {
                 let wi = mirror(wo);
                 Some(BsdfSample { wi, f: 1.0 / wi.z.abs(), pdf: 1.0, delta: true })
@@ -374,6 +377,36 @@ mod tests {
             let sd = (weights.iter().map(|w| (w - mean).powi(2)).sum::<f64>() / (n * (n - 1)) as f64).sqrt();
             let albedo = integrate_sphere(|wi| bsdf.eval(&wo, wi) * wi.z.abs());
             assert!((mean - albedo).abs() < 5.0 * sd + 1e-4, "{bsdf:?}: {mean} ± {sd} against {albedo}");
+        }
+    }
+
+    #[test]
+    fn every_lobe_gives_finite_non_negative_weights_in_every_direction() {
+        let mut lobes = glossy();
+        lobes.extend([
+            Bsdf::Mirror,
+            Bsdf::Dielectric { eta: 1.5 },
+            Bsdf::Dielectric { eta: 1.0 / 1.5 },
+            Bsdf::Dielectric { eta: 1.0 },
+        ]);
+        let tangent = [Vector3::x(), Vector3::new(0.6, -0.8, 0.0), Vector3::new(1.0, 0.0, 1e-300).normalize()];
+        for bsdf in lobes {
+            let directions = (0..2000).map(|i| sample_uniform_sphere(Sampler::new(14, i, 0).uniform2(0)));
+            for wo in directions.chain(tangent) {
+                for (i, u) in [[0.0, 0.0], [0.999_999, 0.5], [0.5, 0.999_999], [0.3, 0.6]].into_iter().enumerate() {
+                    let Some(s) = bsdf.sample(&wo, u, i as f64 / 4.0) else {
+                        assert!(wo.z == 0.0 && !matches!(bsdf, Bsdf::Phong { .. }), "{bsdf:?} failed at {wo:?}");
+                        continue;
+                    };
+                    let w = s.weight();
+                    assert!(w.is_finite() && w >= 0.0, "{bsdf:?} at {wo:?}: weight {w}");
+                    assert!(
+                        s.f.is_finite() && s.f >= 0.0 && s.pdf.is_finite() && s.pdf >= 0.0,
+                        "{bsdf:?} at {wo:?}: {s:?}"
+                    );
+                    assert!((s.wi.norm() - 1.0).abs() < 1e-13, "{bsdf:?} at {wo:?}: {s:?}");
+                }
+            }
         }
     }
 
