@@ -1,4 +1,5 @@
-//! The pinhole camera of docs/model.md §4.2, in pixel units.
+//! The camera of docs/model.md §4: the pinhole of §4.2 in pixel units, the
+//! thin lens and the orthographic projection of §4.5.
 
 use quadric::nalgebra::{Point3, Vector3};
 use quadric::Ray;
@@ -26,6 +27,50 @@ pub enum CameraError {
     /// The opening angle is outside (0°, 180°).
     #[error("the aperture must lie strictly between 0 and 180 degrees, got {0}")]
     BadAperture(f64),
+    /// The lens radius is negative or not finite.
+    #[error("the lens radius must be finite and >= 0, got {0}")]
+    BadLensRadius(f64),
+    /// The focus distance is not positive or not finite.
+    #[error("the focus distance must be finite and > 0, got {0}")]
+    BadFocusDistance(f64),
+    /// The orthographic image diagonal is not positive or not finite.
+    #[error("the diagonal must be finite and > 0, got {0}")]
+    BadDiagonal(f64),
+}
+
+/// How the camera's rays leave the image plane (docs/model.md §4.5).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// Rays from the eye through the pixels (§4.2): the default.
+    Perspective,
+    /// Parallel rays along `D`, from the pixels of an image rectangle
+    /// through the eye whose diagonal is `diagonal` world units long.
+    Orthographic {
+        /// The world-space length of the image diagonal.
+        diagonal: f64,
+    },
+}
+
+/// The point of the unit disc for the lens sample `(u, v)` in `[0, 1)²`:
+/// Shirley and Chiu's concentric map, which keeps areas (a uniform sample
+/// of the square is a uniform sample of the disc) and maps `(½, ½)` to the
+/// centre exactly (docs/model.md §4.5).
+///
+/// ```
+/// use render::camera::concentric_disc;
+/// assert_eq!(concentric_disc(0.5, 0.5), (0.0, 0.0));
+/// let (x, y) = concentric_disc(1.0, 0.5);
+/// assert!((x - 1.0).abs() < 1e-15 && y.abs() < 1e-15);
+/// ```
+pub fn concentric_disc(u: f64, v: f64) -> (f64, f64) {
+    use std::f64::consts::FRAC_PI_4;
+    let (a, b) = (2.0 * u - 1.0, 2.0 * v - 1.0);
+    if a == 0.0 && b == 0.0 {
+        return (0.0, 0.0);
+    }
+    let (r, phi) =
+        if a.abs() > b.abs() { (a, FRAC_PI_4 * (b / a)) } else { (b, 2.0 * FRAC_PI_4 - FRAC_PI_4 * (a / b)) };
+    (r * phi.cos(), r * phi.sin())
 }
 
 /// The camera: an orthonormal frame `D, U, R` at the eye and the distance
@@ -49,6 +94,11 @@ pub struct Camera {
     height: u32,
     aperture: f64,
     centre: Ray,
+    projection: Projection,
+    /// World size of a pixel (orthographic only; 0 for a perspective camera).
+    pixel: f64,
+    lens_radius: f64,
+    focus: f64,
 }
 
 impl Camera {
@@ -96,12 +146,59 @@ impl Camera {
         if !focal.is_finite() {
             return Err(CameraError::BadAperture(aperture_degrees));
         }
-        Ok(Camera { eye, d, u, r, focal, width, height, aperture: aperture_degrees, centre })
+        Ok(Camera {
+            eye,
+            d,
+            u,
+            r,
+            focal,
+            width,
+            height,
+            aperture: aperture_degrees,
+            centre,
+            projection: Projection::Perspective,
+            pixel: 0.0,
+            lens_radius: 0.0,
+            focus: 1.0,
+        })
     }
 
-    /// The same camera with another image size (the opening angle stays on the diagonal).
+    /// The same camera with a thin lens of radius `lens_radius` (world
+    /// units; 0 is the pinhole) focused at `focus_distance` along `D`
+    /// (docs/model.md §4.5).
+    pub fn with_lens(&self, lens_radius: f64, focus_distance: f64) -> Result<Self, CameraError> {
+        if !(lens_radius.is_finite() && lens_radius >= 0.0) {
+            return Err(CameraError::BadLensRadius(lens_radius));
+        }
+        if !(focus_distance.is_finite() && focus_distance > 0.0) {
+            return Err(CameraError::BadFocusDistance(focus_distance));
+        }
+        Ok(Camera { lens_radius, focus: focus_distance, ..*self })
+    }
+
+    /// The same camera with another projection; an orthographic image's
+    /// diagonal must be finite and positive.
+    pub fn with_projection(&self, projection: Projection) -> Result<Self, CameraError> {
+        let pixel = match projection {
+            Projection::Perspective => 0.0,
+            Projection::Orthographic { diagonal } => {
+                let (w, h) = (f64::from(self.width), f64::from(self.height));
+                let pixel = diagonal / (w * w + h * h).sqrt();
+                if !(diagonal.is_finite() && diagonal > 0.0 && pixel > 0.0) {
+                    return Err(CameraError::BadDiagonal(diagonal));
+                }
+                pixel
+            }
+        };
+        Ok(Camera { projection, pixel, ..*self })
+    }
+
+    /// The same camera with another image size (the opening angle, or the
+    /// orthographic image's world-space diagonal, stays on the diagonal).
     pub fn with_size(&self, width: u32, height: u32) -> Result<Self, CameraError> {
-        Camera::new(self.eye, self.d, self.u, width, height, self.aperture)
+        Camera::new(self.eye, self.d, self.u, width, height, self.aperture)?
+            .with_projection(self.projection)?
+            .with_lens(self.lens_radius, self.focus)
     }
 
     /// The camera with the size overrides of the command line: both given,
@@ -148,6 +245,28 @@ impl Camera {
         self.r
     }
 
+    /// The projection.
+    pub fn projection(&self) -> Projection {
+        self.projection
+    }
+
+    /// The lens radius in world units (0: a pinhole).
+    pub fn lens_radius(&self) -> f64 {
+        self.lens_radius
+    }
+
+    /// The distance from the eye to the plane of sharp focus along `D`
+    /// (only used with a lens).
+    pub fn focus_distance(&self) -> f64 {
+        self.focus
+    }
+
+    /// The world-space size of a pixel of an orthographic camera (0 for a
+    /// perspective one).
+    pub fn pixel_size(&self) -> f64 {
+        self.pixel
+    }
+
     /// `|M - E| = sqrt(DimX² + DimY²) / (2 tan(angle/2))`, in pixels.
     pub fn focal_distance(&self) -> f64 {
         self.focal
@@ -171,31 +290,76 @@ impl Camera {
         self.ray_at(f64::from(i), f64::from(j))
     }
 
-    /// The ray through the (possibly fractional) pixel position `(i, j)`.
+    /// `O_ij - E` of an orthographic camera: the point of pixel `(i, j)` on
+    /// the image plane through the eye, relative to the eye (docs/model.md §4.5).
+    #[inline]
+    fn plane_offset(&self, i: f64, j: f64) -> Vector3<f64> {
+        let (w, h) = (f64::from(self.width), f64::from(self.height));
+        self.pixel * ((j - (w - 1.0) / 2.0) * self.r + ((h - 1.0) / 2.0 - i) * self.u)
+    }
+
+    /// The ray through the (possibly fractional) pixel position `(i, j)`
+    /// from the lens centre: the pinhole ray of a lens camera.
     #[inline]
     pub fn ray_at(&self, i: f64, j: f64) -> Ray {
-        // The offset's D component is `focal > 0` and everything is finite,
-        // so this cannot fail; the fallback only keeps the path panic-free.
-        Ray::new(self.eye, self.offset(i, j)).unwrap_or(self.centre)
+        match self.projection {
+            // The offset's D component is `focal > 0` and everything is finite,
+            // so this cannot fail; the fallback only keeps the path panic-free.
+            Projection::Perspective => Ray::new(self.eye, self.offset(i, j)).unwrap_or(self.centre),
+            Projection::Orthographic { .. } => {
+                Ray::new(self.eye + self.plane_offset(i, j), self.d).unwrap_or(self.centre)
+            }
+        }
     }
 
     /// [`Camera::ray_at`] of four pixel positions `(i, j)`, exactly: the
     /// four directions normalised together ([`Ray::new4`]).
     #[inline]
     pub fn rays4(&self, at: [(f64, f64); 4]) -> [Ray; 4] {
+        if let Projection::Orthographic { .. } = self.projection {
+            return at.map(|(i, j)| self.ray_at(i, j));
+        }
         let rays = Ray::new4(self.eye, &at.map(|(i, j)| self.offset(i, j)));
         rays.map(|r| r.unwrap_or(self.centre))
     }
 
+    /// The ray through pixel position `(i, j)` from the point of the lens
+    /// for the lens sample `(u, v)` in `[0, 1)²` ([`concentric_disc`]):
+    /// from `E + lens_radius (x R + y U)` through the point at distance
+    /// `focus_distance` along `D` that the pinhole ray [`Camera::ray_at`]
+    /// passes (docs/model.md §4.5). Without a lens, that pinhole ray, bit
+    /// for bit.
+    #[inline]
+    pub fn lens_ray(&self, i: f64, j: f64, (u, v): (f64, f64)) -> Ray {
+        if self.lens_radius == 0.0 {
+            return self.ray_at(i, j);
+        }
+        let (x, y) = concentric_disc(u, v);
+        let lens = self.lens_radius * (x * self.r + y * self.u);
+        // Both relative to the eye: the focus point and the lens point.
+        let (start, focus) = match self.projection {
+            Projection::Perspective => (lens, self.offset(i, j) * (self.focus / self.focal)),
+            Projection::Orthographic { .. } => {
+                let o = self.plane_offset(i, j);
+                (o + lens, o + self.focus * self.d)
+            }
+        };
+        Ray::new(self.eye + start, focus - start).unwrap_or(self.centre)
+    }
+
     /// Where the point `x` appears: fractional `(i, j)` of the pixel grid
     /// (centres at integers), or `None` if it is not in front of the eye.
+    /// For a lens camera, where the pinhole (the lens centre) sees it.
     pub fn project(&self, x: &Point3<f64>) -> Option<(f64, f64)> {
         let v = x - self.eye;
         let z = v.dot(&self.d);
         if z <= 0.0 {
             return None;
         }
-        let s = self.focal / z;
+        let s = match self.projection {
+            Projection::Perspective => self.focal / z,
+            Projection::Orthographic { .. } => 1.0 / self.pixel,
+        };
         let (w, h) = (f64::from(self.width), f64::from(self.height));
         let j = v.dot(&self.r) * s + (w - 1.0) / 2.0;
         let i = (h - 1.0) / 2.0 - v.dot(&self.u) * s;
@@ -285,6 +449,143 @@ mod tests {
         let p = cam.ray(10, 40).at(7.0);
         let (i, j) = cam.project(&p).unwrap();
         assert!((i - 10.0).abs() < 1e-9 && (j - 40.0).abs() < 1e-9, "{i} {j}");
+    }
+
+    /// Distance from the point `p` to the line of `ray`.
+    fn off_line(ray: &Ray, p: &Point3<f64>) -> f64 {
+        let v = p - ray.origin();
+        (v - v.dot(&ray.direction()) * ray.direction()).norm()
+    }
+
+    /// Lens samples spread over `[0, 1)²`, the edges and the centre included.
+    fn lens_samples() -> Vec<(f64, f64)> {
+        let mut s: Vec<(f64, f64)> =
+            (0..7).flat_map(|a| (0..7).map(move |b| (a as f64 / 6.0, b as f64 / 6.0))).collect();
+        s.iter_mut().for_each(|(u, v)| (*u, *v) = (u.min(0.999_999), v.min(0.999_999)));
+        s.push((0.5, 0.5));
+        s
+    }
+
+    #[test]
+    fn thin_lens_rays_meet_on_the_focus_plane() {
+        let (e, d, u) = (Point3::new(1.0, -2.0, 3.0), Vector3::new(1.0, 2.0, 3.0), Vector3::new(0.3, 1.0, -0.2));
+        let (radius, focus) = (0.35, 7.5);
+        let cam = Camera::new(e, d, u, 17, 9, 80.0).unwrap().with_lens(radius, focus).unwrap();
+        let dn = d / d.norm();
+        for (i, j) in [(0.0, 0.0), (8.0, 16.0), (4.0, 8.0), (2.25, 11.75)] {
+            // The focus-plane point of the pinhole ray, from the formulas of §4.2.
+            let w = model_pixel(e, d, u, 17.0, 9.0, 80.0, i, j);
+            let p = e + w * (focus / w.dot(&dn));
+            for s in lens_samples() {
+                let ray = cam.lens_ray(i, j, s);
+                let o = ray.origin() - e;
+                assert!(o.dot(&dn).abs() < 1e-12, "origin off the lens plane: {o:?}");
+                assert!(o.norm() <= radius * (1.0 + 1e-12), "origin off the lens disc: {}", o.norm());
+                assert!(
+                    off_line(&ray, &p) < 1e-12 * focus,
+                    "({i},{j}) {s:?}: misses the focus point by {:e}",
+                    off_line(&ray, &p)
+                );
+                assert!(ray.direction().dot(&dn) > 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn lens_origins_cover_the_disc_uniformly() {
+        // A uniform map of the square keeps areas: mean r² = 1/2 on the unit disc,
+        // a quarter of the points in each quadrant and none outside.
+        let n = 200;
+        let (mut r2, mut quadrants) = (0.0, [0usize; 4]);
+        for a in 0..n {
+            for b in 0..n {
+                let (x, y) = concentric_disc((a as f64 + 0.5) / n as f64, (b as f64 + 0.5) / n as f64);
+                assert!(x * x + y * y <= 1.0 + 1e-12);
+                r2 += x * x + y * y;
+                quadrants[usize::from(x < 0.0) * 2 + usize::from(y < 0.0)] += 1;
+            }
+        }
+        let r2 = r2 / (n * n) as f64;
+        assert!((r2 - 0.5).abs() < 1e-3, "mean r² {r2}");
+        assert!(quadrants.iter().all(|q| q.abs_diff(n * n / 4) <= n), "{quadrants:?}");
+    }
+
+    #[test]
+    fn no_lens_is_the_pinhole_bit_for_bit() {
+        let cam = Camera::new(Point3::new(1e3, -2.0, 3.0), Vector3::new(0.2, -0.1, -1.0), Vector3::y(), 64, 48, 50.0)
+            .unwrap()
+            .with_lens(0.0, 3.0)
+            .unwrap();
+        let bits = |r: Ray| (r.origin().map(f64::to_bits), r.direction().map(f64::to_bits));
+        for (i, j) in [(0.0, 0.0), (47.0, 63.0), (10.25, 40.625)] {
+            for s in lens_samples() {
+                assert_eq!(bits(cam.lens_ray(i, j, s)), bits(cam.ray_at(i, j)));
+            }
+        }
+    }
+
+    #[test]
+    fn orthographic_rays_are_parallel_and_span_the_diagonal() {
+        let (e, d) = (Point3::new(0.5, 1.0, 4.0), Vector3::new(0.0, -0.3, -1.0));
+        let (w, h, diagonal) = (40, 30, 5.0);
+        let cam = Camera::new(e, d, Vector3::y(), w, h, 50.0)
+            .unwrap()
+            .with_projection(Projection::Orthographic { diagonal })
+            .unwrap();
+        let dn = d / d.norm();
+        for (i, j) in [(0.0, 0.0), (29.0, 39.0), (7.5, 13.25)] {
+            let ray = cam.ray_at(i, j);
+            assert!((ray.direction() - dn).amax() < 1e-15);
+            assert!((ray.origin() - e).dot(&dn).abs() < 1e-12, "origin off the image plane");
+        }
+        // The outer corners of the corner pixels are `diagonal` apart.
+        let (fw, fh) = (f64::from(w), f64::from(h));
+        let span = cam.ray_at(-0.5, -0.5).origin() - cam.ray_at(fh - 0.5, fw - 0.5).origin();
+        assert!((span.norm() - diagonal).abs() < 1e-12, "{}", span.norm());
+        // The image's sides keep the aspect ratio: 4 : 3 of a 3-4-5 triangle.
+        let across = cam.ray_at(0.0, -0.5).origin() - cam.ray_at(0.0, fw - 0.5).origin();
+        assert!((across.norm() - 4.0).abs() < 1e-12, "{}", across.norm());
+        // Four at a time: the same rays.
+        let at = [(0.0, 0.0), (1.5, 2.0), (29.0, 0.0), (3.0, 39.0)];
+        assert_eq!(cam.rays4(at), at.map(|(i, j)| cam.ray_at(i, j)));
+        // Project inverts the ray.
+        let (i, j) = cam.project(&cam.ray_at(11.0, 7.0).at(3.0)).unwrap();
+        assert!((i - 11.0).abs() < 1e-9 && (j - 7.0).abs() < 1e-9, "{i} {j}");
+        // An orthographic lens: rays through one focus point per pixel.
+        let lens = cam.with_lens(0.2, 6.0).unwrap();
+        let p = cam.ray_at(5.0, 9.0).at(6.0);
+        for s in lens_samples() {
+            let ray = lens.lens_ray(5.0, 9.0, s);
+            assert!(off_line(&ray, &p) < 1e-12, "{s:?}");
+            assert!((ray.origin() - cam.ray_at(5.0, 9.0).origin()).norm() <= 0.2 * (1.0 + 1e-12));
+        }
+    }
+
+    #[test]
+    fn resizing_keeps_lens_and_projection() {
+        let cam = Camera::new(Point3::origin(), -Vector3::z(), Vector3::y(), 40, 30, 50.0)
+            .unwrap()
+            .with_projection(Projection::Orthographic { diagonal: 5.0 })
+            .unwrap()
+            .with_lens(0.1, 4.0)
+            .unwrap();
+        let big = cam.with_size(80, 60).unwrap();
+        assert_eq!(big.projection(), cam.projection());
+        assert_eq!((big.lens_radius(), big.focus_distance()), (0.1, 4.0));
+        assert!((big.pixel_size() - cam.pixel_size() / 2.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn bad_lenses_and_diagonals_are_errors() {
+        let cam = Camera::new(Point3::origin(), -Vector3::z(), Vector3::y(), 4, 4, 50.0).unwrap();
+        assert_eq!(cam.with_lens(-0.1, 1.0), Err(CameraError::BadLensRadius(-0.1)));
+        assert!(matches!(cam.with_lens(f64::NAN, 1.0), Err(CameraError::BadLensRadius(_))));
+        assert_eq!(cam.with_lens(0.1, 0.0), Err(CameraError::BadFocusDistance(0.0)));
+        assert_eq!(cam.with_lens(0.1, f64::INFINITY), Err(CameraError::BadFocusDistance(f64::INFINITY)));
+        let ortho = |diagonal| cam.with_projection(Projection::Orthographic { diagonal });
+        assert_eq!(ortho(0.0), Err(CameraError::BadDiagonal(0.0)));
+        assert_eq!(ortho(-2.0), Err(CameraError::BadDiagonal(-2.0)));
+        assert!(ortho(f64::NAN).is_err() && ortho(f64::INFINITY).is_err());
     }
 
     #[test]

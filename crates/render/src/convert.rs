@@ -8,10 +8,10 @@ use std::path::Path;
 use complex::{Block, Complex, ComplexOptions};
 use quadric::nalgebra::{Point3, Vector3};
 
-use crate::camera::{Camera, CameraError};
+use crate::camera::{Camera, CameraError, Projection};
 use crate::error::{Error, SceneError};
 use crate::flatten::{finite_triple, vec3};
-use crate::format::{CameraSpec, SceneFile};
+use crate::format::{CameraSpec, ProjectionSpec, SceneFile};
 use crate::limits::MAX_BOUNCES;
 use crate::world::{BlockInfo, Light, Material, Model, Settings, Triple, World};
 
@@ -57,7 +57,36 @@ fn camera_field(e: &CameraError, c: &CameraSpec) -> &'static str {
         CameraError::TooLarge(w, h) if h > w => "camera.height",
         CameraError::TooLarge(..) => "camera.width",
         CameraError::BadAperture(_) => "camera.aperture",
+        CameraError::BadLensRadius(_) => "camera.lens_radius",
+        CameraError::BadFocusDistance(_) => "camera.focus_distance",
+        CameraError::BadDiagonal(_) => "camera.diagonal",
     }
+}
+
+/// The camera of `c` (docs/model.md §4): the pinhole, then the projection
+/// and the lens. `focus_distance` defaults to `|direction|`, so that
+/// `direction = target - eye` focuses on the target.
+fn camera(c: &CameraSpec) -> Result<Camera, SceneError> {
+    finite_triple(&c.eye, "camera.eye", "the eye")?;
+    finite_triple(&c.direction, "camera.direction", "the direction")?;
+    finite_triple(&c.up, "camera.up", "the up vector")?;
+    let projection = match (c.projection, c.diagonal) {
+        (ProjectionSpec::Perspective, None) => Projection::Perspective,
+        (ProjectionSpec::Perspective, Some(_)) => {
+            let msg = "only an orthographic camera has a diagonal (set \"projection\": \"orthographic\")";
+            return Err(SceneError::semantic("camera.diagonal", msg));
+        }
+        (ProjectionSpec::Orthographic, Some(diagonal)) => Projection::Orthographic { diagonal },
+        (ProjectionSpec::Orthographic, None) => {
+            let msg = "an orthographic camera needs \"diagonal\", the world-space length of the image diagonal";
+            return Err(SceneError::semantic("camera.projection", msg));
+        }
+    };
+    let focus = c.focus_distance.unwrap_or_else(|| vec3(c.direction).norm());
+    Camera::new(Point3::from(vec3(c.eye)), vec3(c.direction), vec3(c.up), c.width, c.height, c.aperture)
+        .and_then(|cam| cam.with_projection(projection))
+        .and_then(|cam| cam.with_lens(c.lens_radius, focus))
+        .map_err(|e| SceneError::semantic(camera_field(&e, c), e.to_string()))
 }
 
 impl SceneFile {
@@ -82,13 +111,7 @@ impl SceneFile {
     // Everything of `to_world` but the complex: checks the camera, settings,
     // lights and materials and flattens the blocks.
     fn world_parts(&self) -> Result<WorldParts, SceneError> {
-        let c = &self.camera;
-        finite_triple(&c.eye, "camera.eye", "the eye")?;
-        finite_triple(&c.direction, "camera.direction", "the direction")?;
-        finite_triple(&c.up, "camera.up", "the up vector")?;
-        let camera =
-            Camera::new(Point3::from(vec3(c.eye)), vec3(c.direction), vec3(c.up), c.width, c.height, c.aperture)
-                .map_err(|e| SceneError::semantic(camera_field(&e, c), e.to_string()))?;
+        let camera = camera(&self.camera)?;
 
         let s = &self.settings;
         colour(&s.ambient, "settings.ambient", "the ambient light")?;

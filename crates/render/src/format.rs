@@ -48,7 +48,8 @@ pub struct SceneFile {
     pub blocks: Vec<Entry>,
 }
 
-/// The pinhole camera of docs/model.md §4.
+/// The camera of docs/model.md §4: a pinhole by default, a thin lens with
+/// `lens_radius > 0`, orthographic with `projection: "orthographic"`.
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CameraSpec {
@@ -68,6 +69,41 @@ pub struct CameraSpec {
     /// Opening angle in degrees, measured on the image diagonal.
     #[serde(default = "default_aperture")]
     pub aperture: f64,
+    /// Perspective (default) or orthographic projection.
+    #[serde(default, skip_serializing_if = "ProjectionSpec::is_perspective")]
+    pub projection: ProjectionSpec,
+    /// Orthographic only (and required there): the world-space length of
+    /// the image diagonal.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diagonal: Option<f64>,
+    /// Radius of the thin lens in world units; 0 (default) is a pinhole.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub lens_radius: f64,
+    /// Distance from the eye to the plane of sharp focus, measured along
+    /// `direction` (default: the length of `direction`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_distance: Option<f64>,
+}
+
+/// The camera's projection (docs/model.md §4.5).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum ProjectionSpec {
+    /// Rays from the eye through the pixels.
+    #[default]
+    Perspective,
+    /// Parallel rays along `direction`; needs `diagonal`.
+    Orthographic,
+}
+
+impl ProjectionSpec {
+    fn is_perspective(&self) -> bool {
+        *self == ProjectionSpec::Perspective
+    }
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 fn default_up() -> Triple {

@@ -430,9 +430,10 @@ fn render_rows(shader: &Shader, i0: u32, out: &mut [Pixel]) -> u64 {
     scratch.rays
 }
 
-/// Pixel `(i, j)` from an `n × n` stratified grid of sub-pixel rays: the
-/// mean of their colours, the fraction that hit, and the AOVs of the ray
-/// through the centre (docs/model.md §4.3). The sub-pixel rays go four at a time
+/// Pixel `(i, j)` from an `n × n` stratified grid of sub-pixel rays (each
+/// from its own point of the lens, if the camera has one): the mean of
+/// their colours, the fraction that hit, and the AOVs of the pinhole ray
+/// through the centre (docs/model.md §4.3, §4.5). The sub-pixel rays go four at a time
 /// through [`Shader::primary4`], summed in the same order as one by one.
 fn supersampled(shader: &Shader, scratch: &mut Scratch, cam: &Camera, i: u32, j: u32, n: u32) -> Pixel {
     // The centre ray only for the AOVs: its colour would not be used.
@@ -443,20 +444,37 @@ fn supersampled(shader: &Shader, scratch: &mut Scratch, cam: &Camera, i: u32, j:
         let dj = (f64::from(b) + 0.5) / f64::from(n) - 0.5;
         (f64::from(i) + di, f64::from(j) + dj)
     };
+    // With a lens, sub-pixel ray `(a, b)` leaves the lens from the centre
+    // of cell `(b, (a + b) mod n)` of an `n × n` grid on the lens square
+    // (docs/model.md §4.5): a Latin square, so that every lens cell is used
+    // once and each row or column of sub-pixels sees every lens row.
+    let lens = |k: u32| {
+        let (a, b) = (k / n, k % n);
+        ((f64::from(b) + 0.5) / f64::from(n), (f64::from((a + b) % n) + 0.5) / f64::from(n))
+    };
+    let ray = |k: u32| {
+        let (i, j) = sub(k);
+        cam.lens_ray(i, j, lens(k))
+    };
+    let pinhole = cam.lens_radius() == 0.0;
     let mut c = Vector3::zeros();
     let mut covered = 0u32;
     let count = n * n;
     let mut k = 0;
     while k + 4 <= count {
-        for (cs, h) in shader.primary4(&cam.rays4([sub(k), sub(k + 1), sub(k + 2), sub(k + 3)]), scratch) {
+        let rays = if pinhole {
+            cam.rays4([sub(k), sub(k + 1), sub(k + 2), sub(k + 3)])
+        } else {
+            [k, k + 1, k + 2, k + 3].map(ray)
+        };
+        for (cs, h) in shader.primary4(&rays, scratch) {
             c += cs;
             covered += u32::from(h.is_some());
         }
         k += 4;
     }
     for k in k..count {
-        let (i, j) = sub(k);
-        let (cs, h) = shader.primary(&cam.ray_at(i, j), scratch);
+        let (cs, h) = shader.primary(&ray(k), scratch);
         c += cs;
         covered += u32::from(h.is_some());
     }

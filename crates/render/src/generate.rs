@@ -15,7 +15,8 @@ use std::f64::consts::PI;
 use quadric::nalgebra::Vector3;
 
 use crate::format::{
-    Axis, CameraSpec, CylinderSpec, Entry, LightSpec, MaterialSpec, ObjectSpec, Scale, SceneFile, SphereSpec, Step,
+    Axis, CameraSpec, CylinderSpec, Entry, LightSpec, MaterialSpec, ObjectSpec, ProjectionSpec, Scale, SceneFile,
+    SphereSpec, Step,
 };
 use crate::world::{Model, Settings};
 
@@ -37,7 +38,18 @@ fn light(position: [f64; 3], c: f64) -> LightSpec {
 }
 
 fn camera(eye: [f64; 3], direction: [f64; 3], aperture: f64) -> CameraSpec {
-    CameraSpec { eye, direction, up: [0.0, 1.0, 0.0], width: 640, height: 480, aperture }
+    CameraSpec {
+        eye,
+        direction,
+        up: [0.0, 1.0, 0.0],
+        width: 640,
+        height: 480,
+        aperture,
+        projection: ProjectionSpec::Perspective,
+        diagonal: None,
+        lens_radius: 0.0,
+        focus_distance: None,
+    }
 }
 
 fn block(name: String, material: &str, objects: Vec<ObjectSpec>, transform: Vec<Step>) -> Entry {

@@ -36,6 +36,7 @@ use std::fmt::Write;
 use quadric::nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 use quadric::{HalfSpace, Quadric, Solid};
 
+use crate::camera::Projection;
 use crate::world::{Material, Model, World};
 
 /// What to write.
@@ -98,13 +99,18 @@ fn write_scene(out: &mut String, world: &World, options: PovOptions) -> std::fmt
         )?;
         writeln!(out, "background {{ rgb {} }}", v3(&Vector3::from(s.background)))?;
     }
+    // Orthographic: `right` and `up` span the image rectangle in world units.
+    let (kind, scale, forward) = match cam.projection() {
+        Projection::Perspective => ("perspective", 1.0, cam.focal_distance()),
+        Projection::Orthographic { .. } => ("orthographic", cam.pixel_size(), 1.0),
+    };
     writeln!(
         out,
-        "camera {{\n  perspective\n  location {}\n  direction {}\n  right {}\n  up {}\n}}",
+        "camera {{\n  {kind}\n  location {}\n  direction {}\n  right {}\n  up {}\n}}",
         v3(&cam.eye().coords),
-        v3(&(cam.focal_distance() * cam.direction())),
-        v3(&(w * cam.right())),
-        v3(&(h * cam.up()))
+        v3(&(forward * cam.direction())),
+        v3(&(scale * w * cam.right())),
+        v3(&(scale * h * cam.up()))
     )?;
     if !options.mask {
         for l in &world.lights {
