@@ -359,6 +359,44 @@ fn bad_cameras_name_the_field() {
 }
 
 #[test]
+fn bad_lenses_and_projections_name_the_field() {
+    let d = r#""direction": [0, 0, -1]"#;
+    bad_camera(
+        &format!(r#"{d}, "lens_radius": -0.5"#),
+        &["camera.lens_radius, line 1, column 73: the lens radius must be finite and >= 0, got -0.5"],
+    );
+    bad_camera(
+        &format!(r#"{d}, "lens_radius": 1e999"#),
+        &["camera.lens_radius, line 1, column 77: number out of range"],
+    );
+    bad_camera(
+        &format!(r#"{d}, "lens_radius": 0.1, "focus_distance": 0"#),
+        &["camera.focus_distance, line 1, column 96: the focus distance must be finite and > 0, got 0"],
+    );
+    // Checked without a lens too.
+    bad_camera(
+        &format!(r#"{d}, "focus_distance": -2"#),
+        &["camera.focus_distance, line 1, column 76: the focus distance must be finite and > 0, got -2"],
+    );
+    bad_camera(
+        &format!(r#"{d}, "projection": "fisheye""#),
+        &["camera.projection, line 1, column 80: unknown variant `fisheye`, expected `perspective` or `orthographic`"],
+    );
+    bad_camera(
+        &format!(r#"{d}, "projection": "orthographic""#),
+        &["camera.projection, line 1, column 72: an orthographic camera needs \"diagonal\", the world-space length"],
+    );
+    bad_camera(
+        &format!(r#"{d}, "projection": "orthographic", "diagonal": 0"#),
+        &["camera.diagonal, line 1, column 100: the diagonal must be finite and > 0, got 0"],
+    );
+    bad_camera(
+        &format!(r#"{d}, "diagonal": 3"#),
+        &["camera.diagonal, line 1, column 70: only an orthographic camera has a diagonal (set \"projection\": \"orthographic\")"],
+    );
+}
+
+#[test]
 fn bad_settings_and_materials() {
     let cam = r#"{ "eye": [0, 0, 5], "direction": [0, 0, -1] }"#;
     check(&*with_camera(cam, r#"{ "epsilon": -1 }"#), 1, &["settings.epsilon", "must be finite and >= 0"]);
