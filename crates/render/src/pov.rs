@@ -301,6 +301,20 @@ mod tests {
     }
 
     #[test]
+    fn orthographic_cameras_span_the_image_in_world_units() {
+        // A 3-4-5 image: a diagonal of 5 world units is 4 wide and 3 high.
+        let text = r#"{ "camera": { "eye": [0, 0, 5], "direction": [0, 0, -2], "width": 40, "height": 30,
+                                    "projection": "orthographic", "diagonal": 5 },
+                        "blocks": [ { "objects": [ { "sphere": {} } ] } ] }"#;
+        let world = crate::format::SceneFile::load_str(text).unwrap();
+        let pov = export(&world, PovOptions::default());
+        let camera = pov.split("camera {").nth(1).unwrap();
+        assert!(camera.contains("orthographic"), "{camera}");
+        assert!(camera.contains("direction <0, 0, -1>"), "{camera}");
+        assert!(camera.contains("right <4, 0, 0>") && camera.contains("up <0, 3, 0>"), "{camera}");
+    }
+
+    #[test]
     fn numbers_never_use_exponents() {
         for x in [1e-20, 1e20, -3.5e-7, 0.0, -0.0, 1.0 / 3.0] {
             let s = Num(x).to_string();
