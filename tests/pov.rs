@@ -84,6 +84,29 @@ fn povray_masks_match_block_ids() {
     }
 }
 
+/// POV-Ray's orthographic camera, from the exported vectors, sees the blocks
+/// on the pixels komplex's orthographic rays (model §4.5) do.
+#[test]
+fn povray_orthographic_masks_match_block_ids() {
+    if !have_povray() {
+        return;
+    }
+    let dir = tempdir();
+    let text = std::fs::read_to_string(crate::support::scene("table.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["camera"]["projection"] = "orthographic".into();
+    v["camera"]["diagonal"] = 5.0.into();
+    v.as_object_mut().unwrap().remove("$schema");
+    let scene = crate::support::write_scene(dir.path(), "ortho.json", &v.to_string());
+    let ours: Vec<u32> = render_frame(&world(&scene, Some((WIDTH, HEIGHT)))).block;
+    let theirs = pov_mask(dir.path(), &scene);
+    let same = ours.iter().zip(&theirs).filter(|(a, b)| a == b).count();
+    let blocks = ours.iter().filter(|b| **b != 0).collect::<std::collections::BTreeSet<_>>().len();
+    assert!(blocks >= 2, "only {blocks} blocks visible");
+    let share = same as f64 / ours.len() as f64;
+    assert!(share >= 0.999, "POV-Ray's orthographic mask agrees on {:.3}% of pixels", 100.0 * share);
+}
+
 /// The numbers in a line of POV source (fractions like `3/255` are two numbers).
 fn numbers(line: &str) -> Vec<f64> {
     line.split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-')).filter_map(|t| t.parse().ok()).collect()
