@@ -47,6 +47,7 @@ pub mod rays;
 pub mod sampling;
 pub mod shade;
 pub mod slice;
+pub mod texture;
 pub mod trace;
 pub mod warp;
 pub mod world;
