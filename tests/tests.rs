@@ -15,6 +15,7 @@ mod measure;
 mod mutations;
 mod shading;
 mod slice;
+mod textures;
 mod trace;
 
 mod pov;

@@ -11,9 +11,10 @@ use quadric::nalgebra::{Point3, Vector3};
 use crate::camera::{Camera, CameraError, Projection};
 use crate::error::{Error, SceneError};
 use crate::flatten::{finite_triple, vec3};
-use crate::format::{CameraSpec, ProjectionSpec, SceneFile};
+use crate::format::{CameraSpec, ColourSpec, ProjectionSpec, SceneFile, TextureSpec, VeinSpec};
 use crate::limits::MAX_BOUNCES;
-use crate::world::{BlockInfo, Light, Material, Model, Settings, Triple, World};
+use crate::texture::{Bump, Texture};
+use crate::world::{BlockInfo, Light, Material, Model, Settings, Textures, Triple, World};
 
 /// Reads and converts a scene file.
 pub fn load(path: &Path) -> Result<World, Error> {
@@ -40,6 +41,76 @@ fn colour(t: &Triple, place: &str, what: &str) -> Result<(), SceneError> {
         return Err(SceneError::semantic(place, format!("{what} must not be negative, got {t:?}")));
     }
     Ok(())
+}
+
+/// A texture's `scale` (or a bump's): finite and positive.
+fn positive(x: f64, place: &str, what: &str) -> Result<(), SceneError> {
+    if x.is_finite() && x > 0.0 {
+        Ok(())
+    } else {
+        Err(SceneError::semantic(place, format!("{what} must be finite and > 0, got {x}")))
+    }
+}
+
+/// A texture's `octaves`: 1 to [`MAX_OCTAVES`].
+fn octaves(n: u32, place: &str) -> Result<(), SceneError> {
+    if (1..=MAX_OCTAVES).contains(&n) {
+        Ok(())
+    } else {
+        Err(SceneError::semantic(place, format!("octaves must be between 1 and {MAX_OCTAVES}, got {n}")))
+    }
+}
+
+/// The most octaves a texture sums (the 17th would be below a 65,000th of the first).
+const MAX_OCTAVES: u32 = 16;
+
+/// A material colour checked and resolved: its constant colour (the mean
+/// of a texture's two colours) and its texture. `place` is the colour's
+/// path (`materials.m.diffuse`), `what` its key.
+fn resolve_colour(c: &ColourSpec, place: &str, what: &str) -> Result<(Vector3<f64>, Option<Texture>), SceneError> {
+    let t = match c {
+        ColourSpec::Rgb(t) => {
+            colour(t, place, what)?;
+            return Ok((vec3(*t), None));
+        }
+        ColourSpec::Texture(t) => t,
+    };
+    let (kind, scale, colors) = match &**t {
+        TextureSpec::Checker(c) => ("checker", c.scale, &c.colors),
+        TextureSpec::Noise(n) => ("noise", n.scale, &n.colors),
+        TextureSpec::Marble(v) => ("marble", v.scale, &v.colors),
+        TextureSpec::Wood(v) => ("wood", v.scale, &v.colors),
+    };
+    let at = format!("{place}.{kind}");
+    positive(scale, &format!("{at}.scale"), "scale")?;
+    for (i, c) in colors.iter().enumerate() {
+        colour(c, &format!("{at}.colors[{i}]"), what)?;
+    }
+    let vein = |v: &VeinSpec| -> Result<(), SceneError> {
+        octaves(v.octaves, &format!("{at}.octaves"))?;
+        if !v.turbulence.is_finite() {
+            let msg = format!("turbulence must be finite, got {}", v.turbulence);
+            return Err(SceneError::semantic(&format!("{at}.turbulence"), msg));
+        }
+        Ok(())
+    };
+    let colors = [vec3(colors[0]), vec3(colors[1])];
+    let texture = match &**t {
+        TextureSpec::Checker(_) => Texture::Checker { scale, colors },
+        TextureSpec::Noise(n) => {
+            octaves(n.octaves, &format!("{at}.octaves"))?;
+            Texture::Noise { scale, octaves: n.octaves, colors }
+        }
+        TextureSpec::Marble(v) => {
+            vein(v)?;
+            Texture::Marble { scale, octaves: v.octaves, turbulence: v.turbulence, colors }
+        }
+        TextureSpec::Wood(v) => {
+            vein(v)?;
+            Texture::Wood { scale, octaves: v.octaves, turbulence: v.turbulence, colors }
+        }
+    };
+    Ok(((colors[0] + colors[1]) * 0.5, Some(texture)))
 }
 
 /// The member of `camera` a camera error is about, so that the error
@@ -154,14 +225,27 @@ impl SceneFile {
         let mut materials = Vec::with_capacity(self.materials.len() + 1);
         for (name, m) in &self.materials {
             let place = format!("materials{}", crate::locate::key_step(name));
-            for (t, what) in [
-                (&m.ambient, "ambient"),
-                (&m.diffuse, "diffuse"),
-                (&m.specular, "specular"),
-                (&m.reflect, "reflect"),
-                (&m.transmit, "transmit"),
-            ] {
-                colour(t, &format!("{place}.{what}"), what)?;
+            let mut textures = Textures::default();
+            let mut resolve = |c: &ColourSpec, what: &str, slot: fn(&mut Textures) -> &mut Option<Texture>| {
+                let (base, texture) = resolve_colour(c, &format!("{place}.{what}"), what)?;
+                *slot(&mut textures) = texture;
+                Ok::<_, SceneError>(base)
+            };
+            let ambient = resolve(&m.ambient, "ambient", |t| &mut t.ambient)?;
+            let diffuse = resolve(&m.diffuse, "diffuse", |t| &mut t.diffuse)?;
+            let specular = resolve(&m.specular, "specular", |t| &mut t.specular)?;
+            let reflect = resolve(&m.reflect, "reflect", |t| &mut t.reflect)?;
+            let transmit = resolve(&m.transmit, "transmit", |t| &mut t.transmit)?;
+            if let Some(b) = &m.bump {
+                let at = format!("{place}.bump.noise");
+                positive(b.noise.scale, &format!("{at}.scale"), "scale")?;
+                if !b.noise.strength.is_finite() {
+                    let msg = format!("strength must be finite, got {}", b.noise.strength);
+                    return Err(SceneError::semantic(&format!("{at}.strength"), msg));
+                }
+                octaves(b.noise.octaves, &format!("{at}.octaves"))?;
+                textures.bump =
+                    Some(Bump { scale: b.noise.scale, strength: b.noise.strength, octaves: b.noise.octaves });
             }
             if !(m.shininess.is_finite() && m.shininess >= 0.0) {
                 let msg = format!("shininess must be finite and >= 0, got {}", m.shininess);
@@ -173,14 +257,15 @@ impl SceneFile {
             }
             materials.push(Material {
                 name: name.clone(),
-                ambient: vec3(m.ambient),
-                diffuse: vec3(m.diffuse),
-                specular: vec3(m.specular),
+                ambient,
+                diffuse,
+                specular,
                 shininess: m.shininess,
                 model: m.model,
-                reflect: vec3(m.reflect),
-                transmit: vec3(m.transmit),
+                reflect,
+                transmit,
                 ior: m.ior,
+                textures: m.is_textured().then(|| Box::new(textures)),
             });
         }
         // Blocks without a material get a plain grey one, appended last so
@@ -196,6 +281,7 @@ impl SceneFile {
             reflect: Vector3::zeros(),
             transmit: Vector3::zeros(),
             ior: 1.0,
+            textures: None,
         });
 
         let (blocks, infos) = self.flattened(default_material)?;

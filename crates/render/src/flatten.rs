@@ -94,8 +94,16 @@ impl SceneFile {
         use rayon::prelude::*;
         /// Top-level entries per run (a run takes about a millisecond).
         const RUN: usize = 1024;
-        let flattener =
-            |before| Flattener { materials: &self.materials, default_material, before, blocks: vec![], infos: vec![] };
+        // Per material index (the default last), whether its blocks keep their frame.
+        let textured: Vec<bool> = self.materials.values().map(MaterialSpec::is_textured).chain([false]).collect();
+        let flattener = |before| Flattener {
+            materials: &self.materials,
+            textured: &textured,
+            default_material,
+            before,
+            blocks: vec![],
+            infos: vec![],
+        };
         if self.blocks.len() < 2 * RUN {
             let mut flat = flattener(0);
             flat.entries(&self.blocks, 0, "blocks", &[])?;
@@ -141,6 +149,8 @@ fn block_count(e: &Entry, depth: usize) -> usize {
 
 struct Flattener<'a> {
     materials: &'a BTreeMap<String, MaterialSpec>,
+    /// Per material index, whether it is textured (`MaterialSpec::is_textured`).
+    textured: &'a [bool],
     default_material: usize,
     /// Blocks that come before this flattener's first (in other runs).
     before: usize,
@@ -262,7 +272,11 @@ impl Flattener<'_> {
         let block = Block::new(name, solids, opacity, MaterialKey(material as u32))
             .map_err(|err| SceneError::semantic(&here, err.to_string()))?;
         self.blocks.push(block);
-        self.infos.push(BlockInfo { material, solid_materials, path: here });
+        // Only a textured block keeps its frame: untextured scenes neither
+        // store nor read one.
+        let textured = |m: usize| self.textured.get(m).copied().unwrap_or(false);
+        let frame = (textured(material) || solid_materials.iter().any(|&m| textured(m))).then(|| placement.inverse());
+        self.infos.push(BlockInfo { material, solid_materials, path: here, frame });
         Ok(())
     }
 }
@@ -502,8 +516,15 @@ mod tests {
     /// Flattens `scene` in one run, as scenes shorter than two runs are.
     fn sequential(scene: &SceneFile) -> Result<(Vec<Block>, Vec<BlockInfo>), SceneError> {
         let materials = &scene.materials;
-        let mut flat =
-            Flattener { materials, default_material: materials.len(), before: 0, blocks: vec![], infos: vec![] };
+        let textured: Vec<bool> = materials.values().map(MaterialSpec::is_textured).chain([false]).collect();
+        let mut flat = Flattener {
+            materials,
+            textured: &textured,
+            default_material: materials.len(),
+            before: 0,
+            blocks: vec![],
+            infos: vec![],
+        };
         flat.entries(&scene.blocks, 0, "blocks", &[])?;
         Ok((flat.blocks, flat.infos))
     }

@@ -136,19 +136,20 @@ pub struct LightSpec {
     pub specular: Option<Triple>,
 }
 
-/// A surface material (docs/model.md §5.1).
+/// A surface material (docs/model.md §5.1). Each colour is a triple or a
+/// procedural texture (docs/model.md §5.4).
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
     /// Ambient reflectance `Ma`.
     #[serde(default)]
-    pub ambient: Triple,
+    pub ambient: ColourSpec,
     /// Diffuse reflectance `Md`.
     #[serde(default)]
-    pub diffuse: Triple,
+    pub diffuse: ColourSpec,
     /// Specular reflectance `Ms`.
     #[serde(default)]
-    pub specular: Triple,
+    pub specular: ColourSpec,
     /// Specular exponent `p`.
     #[serde(default = "default_shininess")]
     pub shininess: f64,
@@ -157,13 +158,166 @@ pub struct MaterialSpec {
     pub model: Model,
     /// Mirror reflection weight `kr`.
     #[serde(default)]
-    pub reflect: Triple,
+    pub reflect: ColourSpec,
     /// Transmission weight `kt` (used on transparent blocks).
     #[serde(default)]
-    pub transmit: Triple,
+    pub transmit: ColourSpec,
     /// Index of refraction of the medium (transparent blocks).
     #[serde(default = "default_ior")]
     pub ior: f64,
+    /// A bump map tilting the shading normal (docs/model.md §5.4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bump: Option<BumpSpec>,
+}
+
+impl MaterialSpec {
+    /// Whether a colour is a texture or the material has a bump map: its
+    /// blocks then keep their frame (`BlockInfo::frame`).
+    pub fn is_textured(&self) -> bool {
+        self.bump.is_some()
+            || [&self.ambient, &self.diffuse, &self.specular, &self.reflect, &self.transmit]
+                .iter()
+                .any(|c| matches!(c, ColourSpec::Texture(_)))
+    }
+}
+
+/// A colour of a material: a triple `[r, g, b]`, or a procedural texture
+/// `{"checker": {...}}`, `{"noise": {...}}`, `{"marble": {...}}` or
+/// `{"wood": {...}}` evaluated in the block's own frame.
+#[derive(Clone, Debug, Serialize, JsonSchema)]
+#[serde(untagged)]
+pub enum ColourSpec {
+    /// The same colour everywhere.
+    Rgb(Triple),
+    /// A procedural texture.
+    Texture(Box<TextureSpec>),
+}
+
+impl Default for ColourSpec {
+    fn default() -> Self {
+        ColourSpec::Rgb([0.0; 3])
+    }
+}
+
+// A visitor of its own rather than `untagged` (which the schema follows):
+// an error inside a texture then names its place and what went wrong
+// there, not "did not match any variant".
+impl<'de> Deserialize<'de> for ColourSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Colour;
+        impl<'de> serde::de::Visitor<'de> for Colour {
+            type Value = ColourSpec;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a colour [r, g, b] or a texture {\"checker\" | \"noise\" | \"marble\" | \"wood\": {...}}")
+            }
+
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, seq: A) -> Result<ColourSpec, A::Error> {
+                Triple::deserialize(serde::de::value::SeqAccessDeserializer::new(seq)).map(ColourSpec::Rgb)
+            }
+
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<ColourSpec, A::Error> {
+                TextureSpec::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+                    .map(|t| ColourSpec::Texture(Box::new(t)))
+            }
+        }
+        deserializer.deserialize_any(Colour)
+    }
+}
+
+/// A procedural texture: exactly one key.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum TextureSpec {
+    /// Cubes of side `scale` in alternating colours.
+    Checker(CheckerSpec),
+    /// Fractal Perlin noise blending the two colours.
+    Noise(NoiseSpec),
+    /// Turbulent stripes across x, one period per `scale`.
+    Marble(VeinSpec),
+    /// Turbulent rings around the y axis, one per `scale`.
+    Wood(VeinSpec),
+}
+
+/// Options of a checker texture.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CheckerSpec {
+    /// Side of a cell, in units of the block's frame (default 1).
+    #[serde(default = "default_one")]
+    pub scale: f64,
+    /// The two colours (default black and white).
+    #[serde(default = "default_colors")]
+    pub colors: [Triple; 2],
+}
+
+/// Options of a noise texture.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct NoiseSpec {
+    /// Size of a noise feature, in units of the block's frame (default 1).
+    #[serde(default = "default_one")]
+    pub scale: f64,
+    /// Octaves summed, 1 to 16 (default 4).
+    #[serde(default = "default_octaves")]
+    pub octaves: u32,
+    /// The colours at noise -1 and 1 (default black and white).
+    #[serde(default = "default_colors")]
+    pub colors: [Triple; 2],
+}
+
+/// Options of a marble or wood texture.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct VeinSpec {
+    /// Stripe period or ring spacing, in units of the block's frame (default 1).
+    #[serde(default = "default_one")]
+    pub scale: f64,
+    /// Octaves of the turbulence, 1 to 16 (default 4).
+    #[serde(default = "default_octaves")]
+    pub octaves: u32,
+    /// How far the turbulence shifts a stripe or ring, in periods (default 1).
+    #[serde(default = "default_one")]
+    pub turbulence: f64,
+    /// The two colours (default black and white).
+    #[serde(default = "default_colors")]
+    pub colors: [Triple; 2],
+}
+
+/// A bump map: `{"noise": {...}}`.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct BumpSpec {
+    /// Bumps from the gradient of fractal Perlin noise.
+    pub noise: BumpNoiseSpec,
+}
+
+/// Options of a noise bump map.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct BumpNoiseSpec {
+    /// Size of a bump, in units of the block's frame (default 1).
+    #[serde(default = "default_one")]
+    pub scale: f64,
+    /// Slope of the bumps: 0 is flat (default 1).
+    #[serde(default = "default_one")]
+    pub strength: f64,
+    /// Octaves summed, 1 to 16 (default 1).
+    #[serde(default = "default_one_octave")]
+    pub octaves: u32,
+}
+
+fn default_one() -> f64 {
+    1.0
+}
+fn default_octaves() -> u32 {
+    4
+}
+fn default_one_octave() -> u32 {
+    1
+}
+fn default_colors() -> [Triple; 2] {
+    [[0.0; 3], [1.0; 3]]
 }
 
 fn default_shininess() -> f64 {

@@ -15,21 +15,22 @@ use std::f64::consts::PI;
 use quadric::nalgebra::Vector3;
 
 use crate::format::{
-    Axis, CameraSpec, CylinderSpec, Entry, LightSpec, MaterialSpec, ObjectSpec, ProjectionSpec, Scale, SceneFile,
-    SphereSpec, Step,
+    Axis, CameraSpec, ColourSpec, CylinderSpec, Entry, LightSpec, MaterialSpec, ObjectSpec, ProjectionSpec, Scale,
+    SceneFile, SphereSpec, Step,
 };
 use crate::world::{Model, Settings};
 
 fn material(diffuse: [f64; 3], specular: f64, shininess: f64, reflect: f64) -> MaterialSpec {
     MaterialSpec {
-        ambient: diffuse,
-        diffuse,
-        specular: [specular; 3],
+        ambient: ColourSpec::Rgb(diffuse),
+        diffuse: ColourSpec::Rgb(diffuse),
+        specular: ColourSpec::Rgb([specular; 3]),
         shininess,
         model: Model::Phong,
-        reflect: [reflect; 3],
-        transmit: [0.0; 3],
+        reflect: ColourSpec::Rgb([reflect; 3]),
+        transmit: ColourSpec::Rgb([0.0; 3]),
         ior: 1.0,
+        bump: None,
     }
 }
 

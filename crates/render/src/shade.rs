@@ -204,7 +204,25 @@ impl<'w> Shader<'w> {
         let world = self.world;
         let mat = world.surface_material(e.block, e.solid);
         let v = -ray.direction();
-        let n = facing_normal(&e.normal, &ray.direction());
+        let mut n = facing_normal(&e.normal, &ray.direction());
+        // A textured material: its colours at the point, in the block's
+        // frame, and the bumped shading normal (docs/model.md §5.4); the
+        // geometry (spawned rays' origins, ownership) keeps the true one.
+        let textured;
+        let mat = match (&mat.textures, world.frame(e.block)) {
+            (Some(t), Some(frame)) => {
+                let p = frame.apply_point(&e.point);
+                if let Some(bump) = &t.bump {
+                    let bumped = bump.normal(&p, &n, frame.linear());
+                    if bumped.dot(&v) > 0.0 {
+                        n = bumped;
+                    }
+                }
+                textured = mat.at(&p);
+                &textured
+            }
+            _ => mat,
+        };
         let ambient = Vector3::from(world.settings.ambient);
         let mut c = weigh(&mat.ambient, &ambient);
 
@@ -329,7 +347,13 @@ impl<'w> Shader<'w> {
                         return Vector3::zeros();
                     }
                     if previous != Some(block.material()) {
-                        pass = weigh(&pass, &self.world.block_material(id).transmit);
+                        let m = self.world.block_material(id);
+                        let kt = match (&m.textures, self.world.frame(id)) {
+                            // A textured medium: its `transmit` where the shadow ray enters it.
+                            (Some(_), Some(frame)) => m.at(&frame.apply_point(&ray.at(s.start.max(0.0)))).transmit,
+                            _ => m.transmit,
+                        };
+                        pass = weigh(&pass, &kt);
                         if is_zero(&pass) {
                             return pass;
                         }

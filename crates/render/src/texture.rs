@@ -7,7 +7,7 @@
 //! Everything here is plain arithmetic on the point: deterministic, with no
 //! state and no allocation.
 
-use quadric::nalgebra::{Point3, Vector3};
+use quadric::nalgebra::{Matrix3, Point3, Vector3};
 
 /// Colours are linear RGB.
 pub type Rgb = Vector3<f64>;
@@ -130,11 +130,13 @@ impl Texture {
 }
 
 impl Bump {
-    /// The unit normal `n` (a unit vector of the block's frame) tilted by
-    /// the tangential part of the noise gradient at `p` (the block's frame).
-    /// Returns `n` itself where the tilt would leave no normal.
-    pub fn normal(&self, p: &Point3<f64>, n: &Vector3<f64>) -> Vector3<f64> {
-        let g = fractal(&(p.coords / self.scale), self.octaves).1;
+    /// The world unit normal `n` tilted by the tangential part of the
+    /// noise gradient at `p` (a point of the block's frame, which `to_frame`,
+    /// the linear part of the world-to-frame map, maps world vectors into):
+    /// the gradient of `x ↦ f(A x + c)` is `Aᵀ ∇f`. Returns `n` itself where
+    /// the tilt would leave no normal.
+    pub fn normal(&self, p: &Point3<f64>, n: &Vector3<f64>, to_frame: &Matrix3<f64>) -> Vector3<f64> {
+        let g = to_frame.tr_mul(&fractal(&(p.coords / self.scale), self.octaves).1);
         let tangential = g - n * g.dot(n);
         let m = n - tangential * self.strength;
         let len = m.norm();
@@ -419,7 +421,7 @@ mod tests {
         let n = Vector3::y();
         for p in points(1000, 4.0) {
             let p = Point3::from(p);
-            let m = bump.normal(&p, &n);
+            let m = bump.normal(&p, &n, &Matrix3::identity());
             assert!((m.norm() - 1.0).abs() < 1e-12);
             // Against a central-difference gradient of the same fractal noise.
             let h = 1e-6;
@@ -430,6 +432,17 @@ mod tests {
             assert!((m - want).amax() < 1e-6, "{m:?} against {want:?}");
         }
         let flat = Bump { scale: 1.0, strength: 0.0, octaves: 1 };
-        assert_eq!(flat.normal(&Point3::new(0.3, 0.2, 0.1), &n), n);
+        assert_eq!(flat.normal(&Point3::new(0.3, 0.2, 0.1), &n, &Matrix3::identity()), n);
+        // In a frame turned a quarter about z (frame x = world y, frame y =
+        // -world x), the world gradient is the frame's turned back.
+        let to_frame = Matrix3::new(0.0, 1.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
+        let world_n = Vector3::z();
+        for p in points(200, 4.0) {
+            let p = Point3::from(p);
+            let g = fractal(&(p.coords / 0.5), 2).1;
+            let world_g = Vector3::new(-g.y, g.x, g.z);
+            let want = (world_n - Vector3::new(world_g.x, world_g.y, 0.0) * 0.3).normalize();
+            assert!((bump.normal(&p, &world_n, &to_frame) - want).amax() < 1e-12);
+        }
     }
 }

@@ -10,10 +10,12 @@
 
 use complex::Complex;
 use quadric::nalgebra::{Point3, Vector3};
+use quadric::Transform;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::camera::Camera;
+use crate::texture::{Bump, Texture};
 
 /// A colour or vector triple.
 pub type Triple = [f64; 3];
@@ -102,6 +104,49 @@ pub struct Material {
     pub transmit: Vector3<f64>,
     /// Index of refraction.
     pub ior: f64,
+    /// The textures and bump map, if any: then the colours above are
+    /// the textures' mean colours (what `pov` and `check` read), and the
+    /// shader reads [`Material::at`].
+    pub textures: Option<Box<Textures>>,
+}
+
+/// The textured colours of a material (`None`: the constant colour) and
+/// its bump map.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Textures {
+    /// Ambient reflectance.
+    pub ambient: Option<Texture>,
+    /// Diffuse reflectance.
+    pub diffuse: Option<Texture>,
+    /// Specular reflectance.
+    pub specular: Option<Texture>,
+    /// Reflection weight.
+    pub reflect: Option<Texture>,
+    /// Transmission weight.
+    pub transmit: Option<Texture>,
+    /// Bump map.
+    pub bump: Option<Bump>,
+}
+
+impl Material {
+    /// The untextured material of the point `p` of the block's frame:
+    /// each textured colour evaluated there (docs/model.md §5.4).
+    pub fn at(&self, p: &Point3<f64>) -> Material {
+        let pick = |t: &Option<Texture>, c: &Vector3<f64>| t.as_ref().map_or(*c, |t| t.at(p));
+        let Some(t) = &self.textures else { return Material { name: String::new(), textures: None, ..self.clone() } };
+        Material {
+            name: String::new(),
+            ambient: pick(&t.ambient, &self.ambient),
+            diffuse: pick(&t.diffuse, &self.diffuse),
+            specular: pick(&t.specular, &self.specular),
+            shininess: self.shininess,
+            model: self.model,
+            reflect: pick(&t.reflect, &self.reflect),
+            transmit: pick(&t.transmit, &self.transmit),
+            ior: self.ior,
+            textures: None,
+        }
+    }
 }
 
 /// A resolved point light.
@@ -124,6 +169,10 @@ pub struct BlockInfo {
     pub solid_materials: Vec<usize>,
     /// Where the block is in the file (e.g. `blocks[2].blocks[0]`).
     pub path: String,
+    /// World to the block's own frame (the inverse of its transform and
+    /// its groups'), where its textures are evaluated; only for blocks
+    /// with a textured material (docs/model.md §5.4).
+    pub frame: Option<Transform>,
 }
 
 /// A scene ready to render.
@@ -198,5 +247,10 @@ impl World {
     /// The material of a block (its medium, for transparent blocks).
     pub fn block_material(&self, block: complex::BlockId) -> &Material {
         &self.materials[self.blocks[block.index()].material]
+    }
+
+    /// World to the frame of a block with a textured material.
+    pub fn frame(&self, block: complex::BlockId) -> Option<&Transform> {
+        self.blocks[block.index()].frame.as_ref()
     }
 }
