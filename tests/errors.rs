@@ -408,6 +408,24 @@ fn bad_settings_and_materials() {
     check(&*with_material(r#"{ "ior": -1.5 }"#), 1, &["materials.m.ior", "got -1.5"]);
     check(&*with_material(r#"{ "diffuse": [-1, 0, 0] }"#), 1, &["materials.m.diffuse, line 1", "must not be negative"]);
     check(&*with_material(r#"{ "transmit": [0, 0, -0.5] }"#), 1, &["materials.m.transmit", "must not be negative"]);
+    // Textures and bump maps (docs/model.md §5.4).
+    let texture_cases: [(&str, &[&str]); 12] = [
+        (r#"{ "diffuse": { "checker": { "scale": 0 } } }"#, &["materials.m.diffuse.checker.scale, line 1, column 142: scale must be finite and > 0, got 0"]),
+        (r#"{ "bump": { "noise": { "scale": -2 } } }"#, &["materials.m.bump.noise.scale, line 1", "got -2"]),
+        (r#"{ "diffuse": { "noise": { "octaves": 0 } } }"#, &["materials.m.diffuse.noise.octaves, line 1, column 142: octaves must be between 1 and 16, got 0"]),
+        (r#"{ "ambient": { "wood": { "octaves": 17 } } }"#, &["materials.m.ambient.wood.octaves", "got 17"]),
+        (r#"{ "bump": { "noise": { "octaves": 17 } } }"#, &["materials.m.bump.noise.octaves", "got 17"]),
+        (r#"{ "diffuse": { "marble": { "turbulence": -1 } } }"#, &["materials.m.diffuse.marble.turbulence, line 1, column 146: turbulence must be finite and >= 0, got -1"]),
+        (r#"{ "diffuse": { "wood": { "colors": [[1, 1, 1], [0, -1, 0]] } } }"#, &["materials.m.diffuse.wood.colors[1], line 1, column 152: diffuse must not be negative, got [0.0, -1.0, 0.0]"]),
+        (r#"{ "bump": { "noise": { "strength": -1 } } }"#, &["materials.m.bump.noise.strength, line 1, column 140: strength must be finite and >= 0, got -1"]),
+        (r#"{ "diffuse": { "chequer": { } } }"#, &["materials.m.diffuse, line 1, column 128: unknown variant `chequer`", "(did you mean `checker`?)"]),
+        (r#"{ "diffuse": { "checker": { "scale": 1 }, "noise": {} } }"#, &["materials.m.diffuse, line 1, column 153: a texture has one key, got `checker` and `noise`"]),
+        (r#"{ "diffuse": {} }"#, &["materials.m.diffuse, line 1, column 119: a texture needs one key"]),
+        (r#"{ "diffuse": "red" }"#, &["materials.m.diffuse, line 1, column 122: invalid type: string \"red\", expected a colour [r, g, b] or a texture"]),
+    ];
+    for (m, want) in texture_cases {
+        check(&*with_material(m), 1, want);
+    }
     // A name with a dot is written as a quoted step, and still located.
     check(
         &*format!(

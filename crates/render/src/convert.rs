@@ -88,8 +88,8 @@ fn resolve_colour(c: &ColourSpec, place: &str, what: &str) -> Result<(Vector3<f6
     }
     let vein = |v: &VeinSpec| -> Result<(), SceneError> {
         octaves(v.octaves, &format!("{at}.octaves"))?;
-        if !v.turbulence.is_finite() {
-            let msg = format!("turbulence must be finite, got {}", v.turbulence);
+        if !(v.turbulence.is_finite() && v.turbulence >= 0.0) {
+            let msg = format!("turbulence must be finite and >= 0, got {}", v.turbulence);
             return Err(SceneError::semantic(&format!("{at}.turbulence"), msg));
         }
         Ok(())
@@ -239,8 +239,8 @@ impl SceneFile {
             if let Some(b) = &m.bump {
                 let at = format!("{place}.bump.noise");
                 positive(b.noise.scale, &format!("{at}.scale"), "scale")?;
-                if !b.noise.strength.is_finite() {
-                    let msg = format!("strength must be finite, got {}", b.noise.strength);
+                if !(b.noise.strength.is_finite() && b.noise.strength >= 0.0) {
+                    let msg = format!("strength must be finite and >= 0, got {}", b.noise.strength);
                     return Err(SceneError::semantic(&format!("{at}.strength"), msg));
                 }
                 octaves(b.noise.octaves, &format!("{at}.octaves"))?;

@@ -216,9 +216,26 @@ impl<'de> Deserialize<'de> for ColourSpec {
                 Triple::deserialize(serde::de::value::SeqAccessDeserializer::new(seq)).map(ColourSpec::Rgb)
             }
 
-            fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<ColourSpec, A::Error> {
-                TextureSpec::deserialize(serde::de::value::MapAccessDeserializer::new(map))
-                    .map(|t| ColourSpec::Texture(Box::new(t)))
+            // By hand rather than through `TextureSpec`'s own `Deserialize`,
+            // which stops after the first key and leaves a second one to be
+            // reported as a "trailing comma".
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<ColourSpec, A::Error> {
+                use serde::de::Error;
+                const KINDS: &[&str] = &["checker", "noise", "marble", "wood"];
+                let Some(kind) = map.next_key::<String>()? else {
+                    return Err(A::Error::custom("a texture needs one key: `checker`, `noise`, `marble` or `wood`"));
+                };
+                let texture = match kind.as_str() {
+                    "checker" => TextureSpec::Checker(map.next_value()?),
+                    "noise" => TextureSpec::Noise(map.next_value()?),
+                    "marble" => TextureSpec::Marble(map.next_value()?),
+                    "wood" => TextureSpec::Wood(map.next_value()?),
+                    other => return Err(A::Error::unknown_variant(other, KINDS)),
+                };
+                if let Some(extra) = map.next_key::<String>()? {
+                    return Err(A::Error::custom(format!("a texture has one key, got `{kind}` and `{extra}`")));
+                }
+                Ok(ColourSpec::Texture(Box::new(texture)))
             }
         }
         deserializer.deserialize_any(Colour)
