@@ -206,7 +206,7 @@ impl<'w> Shader<'w> {
         let v = -ray.direction();
         let mut n = facing_normal(&e.normal, &ray.direction());
         // A textured material: its colours at the point, in the block's
-        // frame, and the bumped shading normal (docs/model.md §5.4); the
+        // frame, and the bumped shading normal (docs/model.md §5.8); the
         // geometry (spawned rays' origins, ownership) keeps the true one.
         let textured;
         let mat = match (&mat.textures, world.frame(e.block)) {

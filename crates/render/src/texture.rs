@@ -1,4 +1,4 @@
-//! Procedural solid textures and bump mapping (docs/model.md §5.4): a
+//! Procedural solid textures and bump mapping (docs/model.md §5.8): a
 //! colour of a material as a function of the point in the textured block's
 //! own frame, and a shading normal perturbed by the gradient of noise.
 //!
@@ -92,8 +92,17 @@ impl Texture {
     }
 
     /// The blend factor in `[0, 1]` between the two colours at `p` (0 for
-    /// a constant).
+    /// a constant, and where a point far beyond its scale leaves no pattern).
     pub fn pattern(&self, p: &Point3<f64>) -> f64 {
+        let t = self.raw_pattern(p);
+        if t.is_nan() {
+            0.0
+        } else {
+            t
+        }
+    }
+
+    fn raw_pattern(&self, p: &Point3<f64>) -> f64 {
         match *self {
             Texture::Constant(_) => 0.0,
             Texture::Checker { scale, .. } => {
@@ -198,6 +207,10 @@ fn fade(t: f64) -> (f64, f64) {
 /// ramps, written out as a polynomial in the faded coordinates so that the
 /// gradient follows by the product rule.
 pub fn noise(p: &Vector3<f64>) -> (f64, Vector3<f64>) {
+    // A point beyond `f64` (a tiny scale) has no lattice cell.
+    if !p.iter().all(|c| c.is_finite()) {
+        return (0.0, Vector3::zeros());
+    }
     let cell = p.map(f64::floor);
     let f = p - cell;
     // The lattice repeats every 256 cells (Perlin's `& 255`); coordinates
@@ -431,6 +444,17 @@ mod tests {
             let want = Vector3::new(-0.3 * gx, 1.0, -0.3 * gz).normalize();
             assert!((m - want).amax() < 1e-6, "{m:?} against {want:?}");
         }
+        // Points beyond any lattice (a scale of 1e-320) give no pattern, not NaN.
+        for t in [
+            Texture::Noise { scale: 1e-320, octaves: 3, colors: two() },
+            Texture::Marble { scale: 1e-320, octaves: 3, turbulence: 1.0, colors: two() },
+            Texture::Wood { scale: 1e-320, octaves: 3, turbulence: 1.0, colors: two() },
+            Texture::Checker { scale: 1e-320, colors: two() },
+        ] {
+            assert!(t.at(&Point3::new(0.5, 0.25, 1.0)).iter().all(|c| c.is_finite()), "{t:?}");
+        }
+        let tiny = Bump { scale: 1e-320, strength: 1.0, octaves: 3 };
+        assert_eq!(tiny.normal(&Point3::new(0.5, 0.25, 1.0), &n, &Matrix3::identity()), n);
         let flat = Bump { scale: 1.0, strength: 0.0, octaves: 1 };
         assert_eq!(flat.normal(&Point3::new(0.3, 0.2, 0.1), &n, &Matrix3::identity()), n);
         // In a frame turned a quarter about z (frame x = world y, frame y =
