@@ -208,8 +208,11 @@ impl<'w> Shader<'w> {
         // A textured material: its colours at the point, in the block's
         // frame, and the bumped shading normal (docs/model.md §5.8); the
         // geometry (spawned rays' origins, ownership) keeps the true one.
+        // The frame is read only for a textured material: an untextured hit
+        // touches no block data beyond its material.
+        let frame = if mat.textures.is_some() { world.frame(e.block) } else { None };
         let textured;
-        let mat = match (&mat.textures, world.frame(e.block)) {
+        let mat = match (mat.textures.as_deref(), frame) {
             (Some(t), Some(frame)) => {
                 let p = frame.apply_point(&e.point);
                 if let Some(bump) = &t.bump {
@@ -348,10 +351,11 @@ impl<'w> Shader<'w> {
                     }
                     if previous != Some(block.material()) {
                         let m = self.world.block_material(id);
-                        let kt = match (&m.textures, self.world.frame(id)) {
-                            // A textured medium: its `transmit` where the shadow ray enters it.
-                            (Some(_), Some(frame)) => m.at(&frame.apply_point(&ray.at(s.start.max(0.0)))).transmit,
-                            _ => m.transmit,
+                        // A textured medium: its `transmit` where the shadow ray enters it.
+                        let frame = if m.textures.is_some() { self.world.frame(id) } else { None };
+                        let kt = match frame {
+                            Some(frame) => m.at(&frame.apply_point(&ray.at(s.start.max(0.0)))).transmit,
+                            None => m.transmit,
                         };
                         pass = weigh(&pass, &kt);
                         if is_zero(&pass) {
