@@ -208,14 +208,23 @@ impl<'w> Shader<'w> {
         // A textured material: its colours at the point, in the block's
         // frame, and the bumped shading normal (docs/model.md §5.8); the
         // geometry (spawned rays' origins, ownership) keeps the true one.
+        // The frame is read only for a textured material: an untextured hit
+        // touches no block data beyond its material.
+        let frame = if mat.textures.is_some() { world.frame(e.block) } else { None };
         let textured;
-        let mat = if mat.textures.is_some() {
-            let (m, bumped) = textured_at(world, mat, e, &n, &v);
-            n = bumped;
-            textured = m;
-            &textured
-        } else {
-            mat
+        let mat = match (mat.textures.as_deref(), frame) {
+            (Some(t), Some(frame)) => {
+                let p = frame.apply_point(&e.point);
+                if let Some(bump) = &t.bump {
+                    let bumped = bump.normal(&p, &n, frame.linear());
+                    if bumped.dot(&v) > 0.0 {
+                        n = bumped;
+                    }
+                }
+                textured = mat.at(&p);
+                &textured
+            }
+            _ => mat,
         };
         let ambient = Vector3::from(world.settings.ambient);
         let mut c = weigh(&mat.ambient, &ambient);
@@ -343,10 +352,10 @@ impl<'w> Shader<'w> {
                     if previous != Some(block.material()) {
                         let m = self.world.block_material(id);
                         // A textured medium: its `transmit` where the shadow ray enters it.
-                        let kt = if m.textures.is_some() {
-                            textured_transmit(self.world, m, id, &ray.at(s.start.max(0.0)))
-                        } else {
-                            m.transmit
+                        let frame = if m.textures.is_some() { self.world.frame(id) } else { None };
+                        let kt = match frame {
+                            Some(frame) => m.at(&frame.apply_point(&ray.at(s.start.max(0.0)))).transmit,
+                            None => m.transmit,
                         };
                         pass = weigh(&pass, &kt);
                         if is_zero(&pass) {
@@ -377,38 +386,6 @@ impl Event {
         let (before, after) = if h.entering { (None, Some(h.block)) } else { (Some(h.block), None) };
         Event { t: h.t, point: h.point, normal: h.normal, block: h.block, solid: h.solid, before, after }
     }
-}
-
-/// A textured material's colours at the event and its shading normal
-/// (`n` bumped, unless that would face away from `v`). Out of line and
-/// cold: an untextured scene's shading keeps its code as it was.
-#[cold]
-#[inline(never)]
-fn textured_at(
-    world: &World,
-    mat: &Material,
-    e: &Event,
-    n: &Vector3<f64>,
-    v: &Vector3<f64>,
-) -> (Material, Vector3<f64>) {
-    let Some(frame) = world.frame(e.block) else { return (mat.at(&e.point), *n) };
-    let p = frame.apply_point(&e.point);
-    let mut n = *n;
-    if let Some(bump) = mat.textures.as_ref().and_then(|t| t.bump.as_ref()) {
-        let bumped = bump.normal(&p, &n, frame.linear());
-        if bumped.dot(v) > 0.0 {
-            n = bumped;
-        }
-    }
-    (mat.at(&p), n)
-}
-
-/// A textured medium's `transmit` at the world point `x` of block `id`.
-#[cold]
-#[inline(never)]
-fn textured_transmit(world: &World, m: &Material, id: BlockId, x: &Point3<f64>) -> Rgb {
-    let p = world.frame(id).map_or(*x, |f| f.apply_point(x));
-    m.at(&p).transmit
 }
 
 /// The largest exponent [`power`] raises to by repeated squaring.
