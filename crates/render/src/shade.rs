@@ -221,8 +221,11 @@ impl<'w> Shader<'w> {
                         n = bumped;
                     }
                 }
-                textured = mat.at(&p);
-                &textured
+                // `at` gives an empty name and no textures, so nothing is
+                // leaked by not dropping it, and the untextured path keeps
+                // no drop flag and no drop call.
+                textured = std::mem::ManuallyDrop::new(mat.at(&p));
+                &*textured
             }
             _ => mat,
         };
