@@ -1,4 +1,4 @@
-//! Procedural textures end to end (docs/model.md §5.8): a checkered floor
+//! Procedural textures end to end (docs/model.md §5.9): a checkered floor
 //! seen from above shows the analytic checker of its own frame.
 
 use crate::geom::{add, mul, Cam};

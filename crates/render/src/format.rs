@@ -137,7 +137,7 @@ pub struct LightSpec {
 }
 
 /// A surface material (docs/model.md §5.1). Each colour is a triple or a
-/// procedural texture (docs/model.md §5.8).
+/// procedural texture (docs/model.md §5.9).
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
@@ -165,7 +165,7 @@ pub struct MaterialSpec {
     /// Index of refraction of the medium (transparent blocks).
     #[serde(default = "default_ior")]
     pub ior: f64,
-    /// A bump map tilting the shading normal (docs/model.md §5.8).
+    /// A bump map tilting the shading normal (docs/model.md §5.9).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bump: Option<BumpSpec>,
 }

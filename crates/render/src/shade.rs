@@ -206,7 +206,7 @@ impl<'w> Shader<'w> {
         let v = -ray.direction();
         let mut n = facing_normal(&e.normal, &ray.direction());
         // A textured material: its colours at the point, in the block's
-        // frame, and the bumped shading normal (docs/model.md §5.8); the
+        // frame, and the bumped shading normal (docs/model.md §5.9); the
         // geometry (spawned rays' origins, ownership) keeps the true one.
         // The frame is read only for a textured material: an untextured hit
         // touches no block data beyond its material.

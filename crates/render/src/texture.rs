@@ -1,4 +1,4 @@
-//! Procedural solid textures and bump mapping (docs/model.md §5.8): a
+//! Procedural solid textures and bump mapping (docs/model.md §5.9): a
 //! colour of a material as a function of the point in the textured block's
 //! own frame, and a shading normal perturbed by the gradient of noise.
 //!

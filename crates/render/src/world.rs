@@ -130,7 +130,7 @@ pub struct Textures {
 
 impl Material {
     /// The untextured material of the point `p` of the block's frame:
-    /// each textured colour evaluated there (docs/model.md §5.8).
+    /// each textured colour evaluated there (docs/model.md §5.9).
     pub fn at(&self, p: &Point3<f64>) -> Material {
         let pick = |t: &Option<Texture>, c: &Vector3<f64>| t.as_ref().map_or(*c, |t| t.at(p));
         let Some(t) = &self.textures else { return Material { name: String::new(), textures: None, ..self.clone() } };
@@ -171,7 +171,7 @@ pub struct BlockInfo {
     pub path: String,
     /// World to the block's own frame (the inverse of its transform and
     /// its groups'), where its textures are evaluated; only for blocks
-    /// with a textured material (docs/model.md §5.8).
+    /// with a textured material (docs/model.md §5.9).
     pub frame: Option<Transform>,
 }
 
