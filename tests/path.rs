@@ -127,6 +127,36 @@ fn a_sphere_light_gives_the_irradiance_of_its_solid_angle() {
     assert_agrees(mean_and_error(&without, |_| true), want, "BSDF samples only");
 }
 
+/// The error of a Monte Carlo estimate falls as `spp^-½`: the RMSE of the
+/// pixels against the analytic radiance of the sphere-lit plane (found by
+/// BSDF samples only, so that there is noise to measure), at 4 to 256
+/// samples per pixel; the least-squares slope of log RMSE against log spp
+/// is −½ to within the scatter of an RMSE over 400 pixels.
+#[test]
+fn the_error_falls_as_one_over_the_root_of_the_samples() {
+    let want = 0.6 * 10.0 * (0.3f64 / 2.0).powi(2);
+    let points: Vec<(f64, f64)> = [4u32, 16, 64, 256]
+        .iter()
+        .map(|&spp| {
+            let scene = format!(
+                r#"{{ "camera": {{ "eye": [0, 3, 4], "direction": [0, -3, -4], "width": 20, "height": 20, "aperture": 0.2 }},
+                     "settings": {{ "integrator": "path", "spp": {spp}, "max_depth": 0, "seed": {spp} }},
+                     "materials": {{ "m": {{ "diffuse": [0.6, 0.6, 0.6] }}, "lamp": {{ "emission": [10, 10, 10] }} }},
+                     "blocks": [ {{ "material": "lamp", "objects": [ {{ "sphere": {{ "radius": 0.3, "center": [0, 2, 0] }} }} ] }},
+                                 {{ "material": "m", "objects": [ {{ "halfspace": [0, 1, 0, 0] }} ] }} ] }}"#
+            );
+            let frame = render_with(&scene, PathOptions { next_event: false, roulette: true }, None);
+            let mse = frame.rgb[0].iter().map(|&r| (f64::from(r) - want).powi(2)).sum::<f64>() / frame.len() as f64;
+            (f64::from(spp).ln(), mse.sqrt().ln())
+        })
+        .collect();
+    let n = points.len() as f64;
+    let (mx, my) = (points.iter().map(|p| p.0).sum::<f64>() / n, points.iter().map(|p| p.1).sum::<f64>() / n);
+    let slope = points.iter().map(|(x, y)| (x - mx) * (y - my)).sum::<f64>()
+        / points.iter().map(|(x, _)| (x - mx).powi(2)).sum::<f64>();
+    assert!((slope + 0.5).abs() < 0.1, "slope {slope}: {points:?}");
+}
+
 /// A lossless glass ball (exact Fresnel, refraction, total internal
 /// reflection) in a sky of uniform radiance `L` is invisible: every path
 /// that escapes carries `L` (the `(ηi/ηt)²` factors of entering and
