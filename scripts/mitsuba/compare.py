@@ -13,9 +13,10 @@ same image size, samples per pixel and threads:
    difference is within 3 standard errors of the difference.
 2. Time against error. A reference is the mean of both renderers at
    `--ref-spp`; each renderer then renders at each of `--spp` (e.g. 4 16 64
-   256), timed by the wall clock (the fastest of `--runs` renders), and its RMSE against the reference (all
-   pixels, R G B) is reported, with the time each needs to reach Mitsuba's
-   error at each sample count (interpolated on log-log axes) and their ratio.
+   256) `--repeats` times with independent seeds, timed by the wall clock;
+   the RMSE against the reference (all pixels, R G B; the reference's own
+   noise subtracted) and the median time are reported, with the ratio of
+   the times the two need to reach the same error.
    komplex's time is the whole `komplex render` process (parse, load, render,
    EXR written); Mitsuba's is `mitsuba.render` alone (its scene loaded before).
 
@@ -217,53 +218,45 @@ def agreement(scene_path, scene, name, ours, theirs, spp, batches, lines):
     return failed_geometry + failed
 
 
-def interp_time(points, target):
-    """The time at which RMSE reaches `target`, on log-log axes through (time, rmse) points;
-    a trailing '*' marks an extrapolation."""
-    import numpy as np
-    pts = sorted(points)
-    lt, le = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
-    lg = np.log(target)
-    for i in range(len(pts) - 1):
-        if le[i + 1] <= lg <= le[i]:
-            f = (lg - le[i]) / (le[i + 1] - le[i]) if le[i + 1] != le[i] else 0.0
-            return float(np.exp(lt[i] + f * (lt[i + 1] - lt[i]))), ""
-    # Beyond the measured range: RMSE ~ time^-1/2 from the nearest end.
-    t0, e0 = (pts[-1] if lg < le[-1] else pts[0])
-    return t0 * (e0 / target) ** 2, "*"
-
-
-def time_error(scene_path, ours, theirs, spp_list, ref_spp, runs, lines, plot_data):
+def time_error(scene_path, ours, theirs, spp_list, ref_spp, repeats, lines, plot_data):
     import numpy as np
     ref_o = ours.render(scene_path, ref_spp, seed=7)[0]
     ref_m = theirs.render(scene_path, ref_spp, seed=7)[0]
     ref = (ref_o + ref_m) / 2
-    # If both are unbiased, (ref_o - ref_m)/2 has the variance of the reference's own noise.
-    ref_noise = float(np.sqrt(np.mean(((ref_o - ref_m) / 2) ** 2)))
+    # If both are unbiased, (ref_o - ref_m)/2 has the variance of the reference's own noise,
+    # which every image's squared error against it contains: it is subtracted.
+    ref_mse = float(np.mean(((ref_o - ref_m) / 2) ** 2))
     rows, pts_o, pts_m = [], [], []
     for spp in spp_list:
-        # The same image `runs` times, alternating; the fastest time is kept (a shared machine).
-        t_o = t_m = float("inf")
-        for _ in range(runs):
-            img_o, t, _ = ours.render(scene_path, spp, seed=1000 + spp)
-            t_o = min(t_o, t)
-            img_m, t = theirs.render(scene_path, spp, seed=1000 + spp)
-            t_m = min(t_m, t)
-        e_o, e_m = [float(np.sqrt(np.mean((x - ref) ** 2))) for x in (img_o, img_m)]
+        # `repeats` images with independent seeds, the two renderers alternating: the mean squared
+        # error over them (one image's is dominated by a few bright outliers in a caustic) and the
+        # median time (a shared machine).
+        t_o, t_m, mse_o, mse_m = [], [], [], []
+        for k in range(repeats):
+            img, t, _ = ours.render(scene_path, spp, seed=1000 + 17 * spp + k)
+            t_o.append(t)
+            mse_o.append(np.mean((img - ref) ** 2))
+            img, t = theirs.render(scene_path, spp, seed=1000 + 17 * spp + k)
+            t_m.append(t)
+            mse_m.append(np.mean((img - ref) ** 2))
+        t_o, t_m = float(np.median(t_o)), float(np.median(t_m))
+        e_o, e_m = [float(np.sqrt(max(np.mean(m) - ref_mse, 0.0))) for m in (mse_o, mse_m)]
         rows.append((spp, t_o, e_o, t_m, e_m))
         pts_o.append((t_o, e_o))
         pts_m.append((t_m, e_m))
     lines += [f"Time against error: RMSE over all pixels and R, G, B against the mean of both renderers at "
-              f"{ref_spp} spp (the reference's own noise, estimated from the two halves: RMSE {ref_noise:.4f}).", "",
-              "| spp | komplex time | komplex RMSE | Mitsuba time | Mitsuba RMSE |", "|---|---|---|---|---|"]
-    lines += [f"| {s} | {to:.2f} s | {eo:.4f} | {tm:.2f} s | {em:.4f} |" for s, to, eo, tm, em in rows]
-    lines += ["", "Time to reach Mitsuba's RMSE at each sample count (komplex's interpolated on log-log axes; "
-              "`*`: extrapolated as RMSE ∝ time^-1/2):", "",
-              "| RMSE | komplex | Mitsuba | komplex / Mitsuba |", "|---|---|---|---|"]
-    for s, _, _, t_m, e_m in rows:
-        t_o, mark = interp_time(pts_o, e_m)
-        lines.append(f"| {e_m:.4f} (Mitsuba {s} spp) | {t_o:.2f} s{mark} | {t_m:.2f} s | {t_o / t_m:.2f} |")
-    lines.append("")
+              f"{ref_spp} spp, the mean squared error of {repeats} images with independent seeds less the "
+              f"reference's own (RMSE {np.sqrt(ref_mse):.4f}, from the difference of its two halves); the "
+              "median time. The last column is the time komplex needs for Mitsuba's error, over Mitsuba's "
+              "time: `(t·RMSE²)` komplex / `(t·RMSE²)` Mitsuba (the error falls as time^-1/2).", "",
+              "| spp | komplex time | komplex RMSE | Mitsuba time | Mitsuba RMSE | time at equal error, komplex / Mitsuba |",
+              "|---|---|---|---|---|---|"]
+    for s, to, eo, tm, em in rows:
+        ratio = (to * eo ** 2) / (tm * em ** 2) if tm * em > 0 else float("nan")
+        lines.append(f"| {s} | {to:.3f} s | {eo:.4f} | {tm:.3f} s | {em:.4f} | {ratio:.2f} |")
+    s, to, eo, tm, em = rows[-1]
+    lines += ["", f"To reach RMSE {em:.4f} (Mitsuba at {s} spp): Mitsuba {tm:.2f} s, komplex "
+              f"{to * eo ** 2 / em ** 2:.2f} s (from its time and error at {s} spp).", ""]
     plot_data.append((Path(scene_path).stem, pts_o, pts_m))
 
 
@@ -311,7 +304,7 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--check-spp", type=int, default=32, help="samples per pixel of each agreement image")
     ap.add_argument("--batches", type=int, default=16, help="independent images per renderer for the agreement")
-    ap.add_argument("--runs", type=int, default=2, help="timed renders per sample count (the fastest is kept)")
+    ap.add_argument("--repeats", type=int, default=3, help="timed images per renderer and sample count")
     ap.add_argument("--spp", type=int, nargs="+", default=[4, 16, 64, 256], help="sample counts timed")
     ap.add_argument("--ref-spp", type=int, default=2048, help="samples per pixel of each reference")
     ap.add_argument("--skip-agreement", action="store_true")
@@ -340,7 +333,7 @@ def main():
                 failed += [f"{name}: {r}" for r in
                            agreement(scene_path, scene, name, ours, theirs, a.check_spp, a.batches, lines)]
             if not a.skip_timing:
-                time_error(scene_path, ours, theirs, a.spp, a.ref_spp, a.runs, lines, plot_data)
+                time_error(scene_path, ours, theirs, a.spp, a.ref_spp, a.repeats, lines, plot_data)
             print("\n".join(lines[shown:]), file=sys.stderr)
             shown = len(lines)
     lines.append(f"Load average at the end: {os.getloadavg()[0]:.2f}.")
