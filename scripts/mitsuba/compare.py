@@ -24,6 +24,10 @@ Mitsuba runs its `scalar_rgb` variant (its LLVM variants fail to compile on
 these machines) with `drjit.set_thread_count(threads)`; the `path` integrator
 with `max_depth` = ours + 2, the `independent` sampler, a box pixel filter.
 
+The default scenes: scenes/cornell.json, scenes/caustics.json and
+scripts/mitsuba/scenes/lights-and-lens.json (a point light, a spherical lamp,
+a constant sky and a thin lens).
+
 Usage (after `cargo build --release`):
 
     python3 scripts/mitsuba/compare.py [--width 128] [--threads 2] [SCENE.json ...]
@@ -118,7 +122,11 @@ class Mitsuba:
             with open(scene_path) as f:
                 d = convert(json.load(f), width=self.width, height=self.height)
             if integrator:
+                # The AOVs of the pinhole camera, as komplex's (which come from the pinhole ray).
                 d["integrator"] = integrator
+                d["sensor"]["type"] = "perspective"
+                d["sensor"].pop("aperture_radius", None)
+                d["sensor"].pop("focus_distance", None)
             self.loaded[key] = self.mi.load_dict(to_mitsuba_types(d))
         return self.loaded[key]
 
@@ -157,9 +165,10 @@ def regions(scene, name, ids, h, w):
 def geometry(scene_path, aov, theirs, lines):
     """Camera and shapes line up: Mitsuba's mean distance to the first hit (its `depth` AOV,
     256 samples spread over each pixel) against komplex's `Z` at the pixel centre, on the pixels
-    whose 3x3 neighbourhood komplex sees on one block. They line up when 99 % of those pixels agree
-    within 0.1 % (a mean over a pixel of a grazing floor differs from its centre value by more) and
-    Mitsuba hits nothing where komplex sees nothing."""
+    whose 3x3 neighbourhood komplex sees on one block. They line up when the median relative
+    difference is below 0.1 %, 95 % of the pixels agree within 1 % (a mean over a pixel of a grazing
+    floor or a silhouette differs from its centre value by more; half a pixel's shift by far more)
+    and Mitsuba hits nothing where komplex sees nothing."""
     import numpy as np
     depth = theirs.render(scene_path, 256, seed=1, integrator={"type": "aov", "aovs": "dd:depth"})[0][..., 0]
     ids, z = aov["id"], aov["Z"]
@@ -172,11 +181,13 @@ def geometry(scene_path, aov, theirs, lines):
     hit = inner & (ids > 0)
     miss = inner & (ids == 0)
     rel = np.abs(depth[hit] - z[hit]) / z[hit]
-    close = int((rel < 1e-3).sum())
-    lines += [f"Geometry: on {int(hit.sum())} pixels inside one block, Mitsuba's mean hit distance is within 0.1 % of "
-              f"komplex's on {close} (median relative difference {np.median(rel):.1e}); on {int(miss.sum())} pixels "
-              f"komplex sees nothing, Mitsuba hits something on {int((depth[miss] > 0).sum())}.", ""]
-    return close >= 0.99 * hit.sum() and not (depth[miss] > 0).any()
+    close = int((rel < 1e-2).sum())
+    ok = np.median(rel) < 1e-3 and close >= 0.95 * hit.sum() and not (depth[miss] > 0).any()
+    lines += [f"Geometry: on {int(hit.sum())} pixels inside one block, the median relative difference of the "
+              f"distances is {np.median(rel):.1e}, {close} are within 1 %; on {int(miss.sum())} pixels komplex sees "
+              f"nothing, Mitsuba hits something on {int((depth[miss] > 0).sum())}: "
+              f"{'they line up' if ok else '**they do not line up**'}.", ""]
+    return ok
 
 
 def fmt(x, e):
@@ -206,8 +217,11 @@ def agreement(scene_path, scene, name, ours, theirs, spp, batches, lines):
         mo = np.array([img[m].mean(axis=0) for img in imgs_o])  # batches x 3
         mm = np.array([img[m].mean(axis=0) for img in imgs_m])
         so, sm = mo.std(axis=0, ddof=1) / np.sqrt(batches), mm.std(axis=0, ddof=1) / np.sqrt(batches)
-        diff, se = mo.mean(axis=0) - mm.mean(axis=0), np.sqrt(so ** 2 + sm ** 2)
-        z = np.where(se > 0, np.abs(diff) / np.maximum(se, 1e-300), np.where(np.abs(diff) > 1e-12, np.inf, 0.0))
+        diff = mo.mean(axis=0) - mm.mean(axis=0)
+        # A region without noise (a mirror of a constant sky) still differs by the rounding of
+        # 32-bit floats (both renderers' images): 1e-5 of its value is allowed for that.
+        se = np.sqrt(so ** 2 + sm ** 2 + (1e-5 * np.abs(mm.mean(axis=0))) ** 2)
+        z = np.where(se > 0, np.abs(diff) / np.maximum(se, 1e-300), np.where(np.abs(diff) > 0, np.inf, 0.0))
         ok = bool((z <= 3).all())
         worst = max(worst, float(z.max()))
         if not ok:
@@ -297,7 +311,8 @@ def main():
     ensure_venv()
     import mitsuba as mi
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("scenes", nargs="*", default=[str(ROOT / "scenes/cornell.json"), str(ROOT / "scenes/caustics.json")])
+    ap.add_argument("scenes", nargs="*", default=[str(ROOT / "scenes/cornell.json"), str(ROOT / "scenes/caustics.json"),
+                                                  str(HERE / "scenes/lights-and-lens.json")])
     ap.add_argument("--komplex", default=str(ROOT / "target/release/komplex"), help="the komplex binary")
     ap.add_argument("--width", type=int, default=128)
     ap.add_argument("--height", type=int, help="default: the scene's aspect ratio")
