@@ -91,15 +91,22 @@ class Scene:
         self,
         width: Optional[int] = None,
         height: Optional[int] = None,
-        samples: Optional[int] = None,
+        spp: Optional[int] = None,
         threads: Optional[int] = None,
         precision: Optional[str] = None,
+        samples: Optional[int] = None,
+        noise: Optional[float] = None,
+        seed: Optional[int] = None,
     ) -> Dict[str, np.ndarray]:
-        """Renders the scene's camera view (as ``komplex render``): the EXR
-        channels ``R G B A Z N.X N.Y N.Z`` (float32) and ``id.block
-        id.object`` (uint32) as ``(height, width)`` arrays. ``width`` or
-        ``height`` alone keeps the aspect ratio; ``samples`` is an n×n grid
-        per pixel; ``precision`` is ``"fast"``, ``"accurate"`` or ``"certified"``."""
+        """Renders the scene's camera view (as ``komplex render``, with the
+        scene's integrator): the EXR channels ``R G B A Z N.X N.Y N.Z``
+        (float32) and ``id.block id.object`` (uint32) as ``(height, width)``
+        arrays, and under adaptive sampling (``noise``) ``spp`` (uint32) and
+        ``error`` (float32). ``width`` or ``height`` alone keeps the aspect
+        ratio; ``spp`` is samples per pixel (``--spp``), ``samples`` an n×n
+        grid per pixel, ``noise`` the bound of adaptive sampling
+        (``--noise``), ``seed`` the seed of the random samples;
+        ``precision`` is ``"fast"``, ``"accurate"`` or ``"certified"``."""
     def __len__(self) -> int: ...
 
 def load(path: Union[str, PathLike]) -> Scene:

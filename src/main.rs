@@ -75,6 +75,15 @@ struct RenderArgs {
     /// Anti-aliasing: an N×N grid of rays per pixel (overrides settings.samples).
     #[arg(long, value_name = "N")]
     samples: Option<u32>,
+    /// Samples per pixel, each at a random point of the pixel and lens (overrides settings.spp).
+    #[arg(long, value_name = "N")]
+    spp: Option<u32>,
+    /// Adaptive sampling: sample a pixel until the relative standard error of its mean is below T, with at most --spp samples (overrides settings.noise).
+    #[arg(long, value_name = "T")]
+    noise: Option<f64>,
+    /// The seed of the random samples (overrides settings.seed).
+    #[arg(long, value_name = "S")]
+    seed: Option<u64>,
     /// Write the colour channels as 16-bit half floats.
     #[arg(long)]
     half: bool,
@@ -354,7 +363,19 @@ fn run(command: Command) -> Result<(), Error> {
 /// `komplex render`: the EXR (and the PNG preview), both checked writable
 /// before the render and written only once it is complete.
 fn render(args: RenderArgs) -> Result<(), Error> {
-    let RenderArgs { scene, output, png, size, run: RunArgs { threads, precision }, samples, half, exposure } = args;
+    let RenderArgs {
+        scene,
+        output,
+        png,
+        size,
+        run: RunArgs { threads, precision },
+        samples,
+        spp,
+        noise,
+        seed,
+        half,
+        exposure,
+    } = args;
     render::frame::set_global_threads(threads)?;
     let cancel = interrupt_flag();
     if !exposure.is_finite() {
@@ -366,6 +387,21 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             return Err(Error::Options(format!("--samples must be between 1 and 16, got {n}")));
         }
         world.settings.samples = n;
+    }
+    if let Some(n) = spp {
+        if !(1..=render::limits::MAX_SPP).contains(&n) {
+            return Err(Error::Options(format!("--spp must be between 1 and {}, got {n}", render::limits::MAX_SPP)));
+        }
+        world.settings.spp = Some(n);
+    }
+    if let Some(t) = noise {
+        if !(t.is_finite() && t > 0.0) {
+            return Err(Error::Options(format!("--noise must be a finite number > 0, got {t}")));
+        }
+        world.settings.noise = Some(t);
+    }
+    if let Some(s) = seed {
+        world.settings.seed = s;
     }
     size.apply(&mut world)?;
     world.complex.set_precision(precision.into());
@@ -389,7 +425,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         }
     };
     let (frame, stats) =
-        render::frame::render_until(&world, render::frame::Options { threads, colour_only: false }, &tick, &cancel)?;
+        render::frame::render_until(&world, render::frame::Options { threads, ..Default::default() }, &tick, &cancel)?;
     if let Some(b) = &bar {
         b.finish_and_clear();
     }

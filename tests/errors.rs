@@ -401,6 +401,19 @@ fn bad_settings_and_materials() {
     let cam = r#"{ "eye": [0, 0, 5], "direction": [0, 0, -1] }"#;
     check(&*with_camera(cam, r#"{ "epsilon": -1 }"#), 1, &["settings.epsilon", "must be finite and >= 0"]);
     check(&*with_camera(cam, r#"{ "samples": 0 }"#), 1, &["settings.samples", "between 1 and 16"]);
+    check(&*with_camera(cam, r#"{ "spp": 0 }"#), 1, &["settings.spp", "between 1 and 16777216, got 0"]);
+    check(&*with_camera(cam, r#"{ "noise": 0 }"#), 1, &["settings.noise", "must be finite and > 0, got 0"]);
+    check(&*with_camera(cam, r#"{ "noise": -0.5 }"#), 1, &["settings.noise", "got -0.5"]);
+    check(
+        &*with_camera(cam, r#"{ "integrator": "bdpt" }"#),
+        1,
+        &["settings.integrator", "expected `whitted` or `path`"],
+    );
+    check(
+        &*with_material(r#"{ "emission": [1, -1, 0] }"#),
+        1,
+        &["materials.m.emission, line 1", "must not be negative"],
+    );
     check(&*with_camera(cam, r#"{ "max_depth": 1000000 }"#), 1, &["settings.max_depth", "at most 64"]);
     check(&*with_camera(cam, r#"{ "background": [-1, 0, 0] }"#), 1, &["settings.background", "must not be negative"]);
     check(&*with_camera(cam, r#"{ "ambient": [0, -0.1, 0] }"#), 1, &["settings.ambient", "must not be negative"]);
@@ -590,6 +603,8 @@ fn bad_option_values_exit_1() {
     );
     check(&["render", "ok.json", "-o", "out.exr", "--width", "100000"], 1, &["100000x75000 is too large"]);
     check(&["render", "ok.json", "-o", "out.exr", "--samples", "17"], 1, &["--samples must be between 1 and 16"]);
+    check(&["render", "ok.json", "-o", "out.exr", "--spp", "0"], 1, &["--spp must be between 1 and 16777216, got 0"]);
+    check(&["render", "ok.json", "-o", "out.exr", "--noise", "0"], 1, &["--noise must be a finite number > 0, got 0"]);
     check(&["bench", "ok.json", "--runs", "0"], 1, &["--runs must be between 1 and 1000, got 0"]);
     check(
         &["render", "ok.json", "-o", "out.exr", "--png", "p.png", "--exposure", "nan"],

@@ -132,7 +132,7 @@ fn a_frame_with_a_short_plane_is_an_error_and_writes_nothing() {
 fn a_colour_only_frame_writes_rgba_alone() {
     let dir = tempdir();
     let w = world(&crate::support::scene("table.json"), Some((20, 14)));
-    let options = render::frame::Options { threads: Some(2), colour_only: true };
+    let options = render::frame::Options { threads: Some(2), colour_only: true, ..Default::default() };
     let (frame, _) = render::frame::render(&w, options, &|| {}).unwrap();
     let full = render_frame(&w);
     let out = dir.path().join("colour.exr");

@@ -41,7 +41,7 @@ fn a_set_flag_stops_the_render_loop() {
     let run = |flag: &AtomicBool, rows: &AtomicU32| {
         render::frame::render_until(
             &world,
-            render::frame::Options { threads: Some(2), colour_only: false },
+            render::frame::Options { threads: Some(2), ..Default::default() },
             &|| {
                 // Ctrl-C arrives once the third row is done.
                 if rows.fetch_add(1, Ordering::SeqCst) == 2 {

@@ -18,5 +18,6 @@ mod slice;
 mod textures;
 mod trace;
 
+mod path;
 mod pov;
 mod rays;

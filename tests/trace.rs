@@ -174,7 +174,7 @@ fn every_pixel_of_a_frame_is_its_own_primary_ray() {
             let w = world(&scene(name), Some((width, height)));
             let frame = crate::support::render_frame(&w);
             // Colour only (`komplex bench`): the same colours, no AOV planes.
-            let options = render::frame::Options { threads: Some(2), colour_only: true };
+            let options = render::frame::Options { threads: Some(2), colour_only: true, ..Default::default() };
             let colour = render::frame::render(&w, options, &|| {}).unwrap().0;
             assert!(frame.has_aovs() && !colour.has_aovs(), "{name} {width}x{height}");
             let n = (width * height) as usize;

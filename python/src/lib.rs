@@ -291,18 +291,24 @@ impl Scene {
         })
     }
 
-    /// Renders the scene's camera view (Whitted shading, as `komplex
-    /// render`) and returns the EXR channels as `(height, width)` arrays:
-    /// `R G B A Z N.X N.Y N.Z` float32 and `id.block id.object` uint32.
-    #[pyo3(signature = (width = None, height = None, samples = None, threads = None, precision = None))]
+    /// Renders the scene's camera view (as `komplex render`, with the
+    /// scene's integrator) and returns the EXR channels as `(height, width)`
+    /// arrays: `R G B A Z N.X N.Y N.Z` float32 and `id.block id.object`
+    /// uint32; under adaptive sampling (`noise`) also `spp` uint32 and
+    /// `error` float32.
+    #[pyo3(signature = (width = None, height = None, spp = None, threads = None, precision = None, samples = None, noise = None, seed = None))]
+    #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &self,
         py: Python<'py>,
         width: Option<u32>,
         height: Option<u32>,
-        samples: Option<u32>,
+        spp: Option<u32>,
         threads: Option<usize>,
         precision: Option<&str>,
+        samples: Option<u32>,
+        noise: Option<f64>,
+        seed: Option<u64>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let precision = precision
             .map(|p| match p {
@@ -319,9 +325,26 @@ impl Scene {
                 return Err(PyValueError::new_err(format!("samples must be between 1 and 16, got {n}")));
             }
         }
+        if let Some(n) = spp {
+            if !(1..=render::limits::MAX_SPP).contains(&n) {
+                let max = render::limits::MAX_SPP;
+                return Err(PyValueError::new_err(format!("spp must be between 1 and {max}, got {n}")));
+            }
+        }
+        if let Some(t) = noise {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(PyValueError::new_err(format!("noise must be a finite number > 0, got {t}")));
+            }
+        }
         let frame = py.detach(|| -> Result<render::frame::Frame, render::Error> {
-            let options = render::frame::Options { threads, colour_only: false };
-            let plain = width.is_none() && height.is_none() && samples.is_none() && precision.is_none();
+            let options = render::frame::Options { threads, ..Default::default() };
+            let plain = width.is_none()
+                && height.is_none()
+                && samples.is_none()
+                && spp.is_none()
+                && noise.is_none()
+                && seed.is_none()
+                && precision.is_none();
             if plain {
                 return render::frame::render(&self.world(), options, &|| {}).map(|(f, _)| f);
             }
@@ -331,20 +354,27 @@ impl Scene {
                 .camera
                 .resized(width, height)
                 .map_err(|e| render::Error::Options(format!("width/height: {e}")))?;
-            let saved = (world.camera, world.settings.samples, world.complex.precision());
+            let saved = (world.camera, world.settings.clone(), world.complex.precision());
             world.camera = camera;
-            world.settings.samples = samples.unwrap_or(saved.1);
+            let settings = &mut world.settings;
+            settings.samples = samples.unwrap_or(settings.samples);
+            settings.spp = spp.or(settings.spp);
+            settings.noise = noise.or(settings.noise);
+            settings.seed = seed.unwrap_or(settings.seed);
             world.complex.set_precision(precision.unwrap_or(saved.2));
             let result = render::frame::render(&world, options, &|| {}).map(|(f, _)| f);
             world.camera = saved.0;
-            world.settings.samples = saved.1;
+            world.settings = saved.1;
             world.complex.set_precision(saved.2);
             result
         });
         let frame = frame.map_err(to_py)?;
         let (h, w) = (frame.height as usize, frame.width as usize);
         let out = PyDict::new(py);
-        let render::frame::Frame { rgb: [r, g, b], alpha, depth, normal: [nx, ny, nz], block, object, .. } = frame;
+        let adaptive = frame.has_adaptive();
+        let render::frame::Frame {
+            rgb: [r, g, b], alpha, depth, normal: [nx, ny, nz], block, object, spp, error, ..
+        } = frame;
         for (name, plane) in
             [("R", r), ("G", g), ("B", b), ("A", alpha), ("Z", depth), ("N.X", nx), ("N.Y", ny), ("N.Z", nz)]
         {
@@ -352,6 +382,10 @@ impl Scene {
         }
         out.set_item("id.block", block.into_pyarray(py).reshape([h, w])?)?;
         out.set_item("id.object", object.into_pyarray(py).reshape([h, w])?)?;
+        if adaptive {
+            out.set_item("spp", spp.into_pyarray(py).reshape([h, w])?)?;
+            out.set_item("error", error.into_pyarray(py).reshape([h, w])?)?;
+        }
         Ok(out)
     }
 

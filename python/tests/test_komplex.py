@@ -210,6 +210,29 @@ def test_render_equals_the_command_line_exr(cli, tmp_path):
     assert komplex.load(scene_path).render(width=8)["R"].shape == (6, 8)
 
 
+def test_path_render_with_spp_and_noise_equals_the_command_line_exr(cli, tmp_path):
+    OpenEXR = pytest.importorskip("OpenEXR")
+    scene_path = SCENES / "primitives.json"
+    out = tmp_path / "p.exr"
+    args = ["--width", "24", "--height", "18", "--spp", "32", "--noise", "0.2", "--seed", "3"]
+    subprocess.run([str(cli), "render", str(scene_path), "-o", str(out), *args], check=True)
+    got = komplex.load(scene_path).render(width=24, height=18, spp=32, noise=0.2, seed=3)
+    assert "spp" in got and "error" in got
+    assert got["spp"].min() >= 16 and got["spp"].max() <= 32
+    with OpenEXR.File(str(out), separate_channels=True) as f:
+        channels = f.channels()
+        assert set(channels) == set(got)
+        for name, channel in channels.items():
+            assert np.array_equal(got[name], channel.pixels, equal_nan=True), name
+    # Another seed, another image of the same scene.
+    other = komplex.load(scene_path).render(width=24, height=18, spp=32, noise=0.2, seed=4)
+    assert not np.array_equal(other["R"], got["R"])
+    with pytest.raises(ValueError, match="spp"):
+        komplex.load(scene_path).render(spp=0)
+    with pytest.raises(ValueError, match="noise"):
+        komplex.load(scene_path).render(noise=-1.0)
+
+
 def test_render_options_checked(balls):
     with pytest.raises(ValueError, match="samples"):
         balls.render(samples=0)

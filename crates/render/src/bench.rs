@@ -95,8 +95,11 @@ pub fn measure_runs(
     let mut times: Vec<Duration> = Vec::new();
     let (mut width, mut height, mut rays) = (0, 0, 0);
     for _ in 0..runs.max(1) {
-        let (frame, stats) =
-            crate::frame::render(&world, crate::frame::Options { threads, colour_only: true }, &|| {})?;
+        let (frame, stats) = crate::frame::render(
+            &world,
+            crate::frame::Options { threads, colour_only: true, ..Default::default() },
+            &|| {},
+        )?;
         (width, height, rays) = (frame.width, frame.height, stats.rays);
         times.push(stats.elapsed);
     }

@@ -12,7 +12,7 @@ use crate::camera::{Camera, CameraError, Projection};
 use crate::error::{Error, SceneError};
 use crate::flatten::{finite_triple, vec3};
 use crate::format::{CameraSpec, ColourSpec, ProjectionSpec, SceneFile, TextureSpec, VeinSpec};
-use crate::limits::MAX_BOUNCES;
+use crate::limits::{MAX_BOUNCES, MAX_SPP};
 use crate::texture::{Bump, Texture};
 use crate::world::{BlockInfo, Light, Material, Model, Settings, Textures, Triple, World};
 
@@ -199,6 +199,16 @@ impl SceneFile {
             }
         }
 
+        if let Some(n) = s.spp {
+            if !(1..=MAX_SPP).contains(&n) {
+                return Err(SceneError::semantic("settings.spp", format!("must be between 1 and {MAX_SPP}, got {n}")));
+            }
+        }
+        if let Some(t) = s.noise {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(SceneError::semantic("settings.noise", format!("must be finite and > 0, got {t}")));
+            }
+        }
         if !(1..=16).contains(&s.samples) {
             return Err(SceneError::semantic(
                 "settings.samples",
@@ -236,6 +246,7 @@ impl SceneFile {
             let specular = resolve(&m.specular, "specular", |t| &mut t.specular)?;
             let reflect = resolve(&m.reflect, "reflect", |t| &mut t.reflect)?;
             let transmit = resolve(&m.transmit, "transmit", |t| &mut t.transmit)?;
+            let emission = resolve(&m.emission, "emission", |t| &mut t.emission)?;
             if let Some(b) = &m.bump {
                 let at = format!("{place}.bump.noise");
                 positive(b.noise.scale, &format!("{at}.scale"), "scale")?;
@@ -265,6 +276,7 @@ impl SceneFile {
                 reflect,
                 transmit,
                 ior: m.ior,
+                emission,
                 textures: m.is_textured().then(|| Box::new(textures)),
             });
         }
@@ -281,6 +293,7 @@ impl SceneFile {
             reflect: Vector3::zeros(),
             transmit: Vector3::zeros(),
             ior: 1.0,
+            emission: Vector3::zeros(),
             textures: None,
         });
 

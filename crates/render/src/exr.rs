@@ -29,7 +29,9 @@ pub enum ColorType {
 ///
 /// Channels: `R`, `G`, `B`, `A` (f32 or f16), `Z` (f32 distance along the
 /// ray, `+∞` on a miss), `N.X`, `N.Y`, `N.Z` (f32 world-space normal facing
-/// the camera, 0 on a miss), `id.block`, `id.object` (u32, 1-based, 0 on a miss).
+/// the camera, 0 on a miss), `id.block`, `id.object` (u32, 1-based, 0 on a miss);
+/// under adaptive sampling also `spp` (u32, the samples each pixel took) and
+/// `error` (f32, the estimated relative standard error of its mean luminance).
 ///
 /// A colour-only frame ([`Options::colour_only`](crate::frame::Options),
 /// whose AOV planes are empty) is written with `R G B A` alone. A frame
@@ -47,7 +49,8 @@ pub fn write_exr(frame: Frame, path: &Path, color: ColorType) -> Result<(), Erro
         );
         return Err(Error::Encode { path: path.to_path_buf(), message });
     }
-    let Frame { rgb: [r, g, b], alpha, depth, normal: [nx, ny, nz], block, object, .. } = frame;
+    let adaptive = frame.has_adaptive();
+    let Frame { rgb: [r, g, b], alpha, depth, normal: [nx, ny, nz], block, object, spp, error, .. } = frame;
     let colour = |plane: Vec<f32>| -> FlatSamples {
         match color {
             ColorType::F32 => FlatSamples::F32(plane),
@@ -66,6 +69,10 @@ pub fn write_exr(frame: Frame, path: &Path, color: ColorType) -> Result<(), Erro
         list.push(AnyChannel::new("N.Z", FlatSamples::F32(nz)));
         list.push(AnyChannel::new("id.block", FlatSamples::U32(block)));
         list.push(AnyChannel::new("id.object", FlatSamples::U32(object)));
+    }
+    if adaptive {
+        list.push(AnyChannel::new("spp", FlatSamples::U32(spp)));
+        list.push(AnyChannel::new("error", FlatSamples::F32(error)));
     }
     let encoding =
         Encoding { compression: Compression::ZIP16, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };

@@ -165,6 +165,10 @@ pub struct MaterialSpec {
     /// Index of refraction of the medium (transparent blocks).
     #[serde(default = "default_ior")]
     pub ior: f64,
+    /// Radiance emitted by the surface towards the outside of its block:
+    /// an area light for the path integrator (ignored by Whitted).
+    #[serde(default, skip_serializing_if = "ColourSpec::is_black")]
+    pub emission: ColourSpec,
     /// A bump map tilting the shading normal (docs/model.md §5.9).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bump: Option<BumpSpec>,
@@ -175,7 +179,7 @@ impl MaterialSpec {
     /// blocks then keep their frame (`BlockInfo::frame`).
     pub fn is_textured(&self) -> bool {
         self.bump.is_some()
-            || [&self.ambient, &self.diffuse, &self.specular, &self.reflect, &self.transmit]
+            || [&self.ambient, &self.diffuse, &self.specular, &self.reflect, &self.transmit, &self.emission]
                 .iter()
                 .any(|c| matches!(c, ColourSpec::Texture(_)))
     }
@@ -191,6 +195,13 @@ pub enum ColourSpec {
     Rgb(Triple),
     /// A procedural texture.
     Texture(Box<TextureSpec>),
+}
+
+impl ColourSpec {
+    /// Whether it is the constant colour black (the default).
+    pub fn is_black(&self) -> bool {
+        matches!(self, ColourSpec::Rgb(c) if c.iter().all(|x| *x == 0.0))
+    }
 }
 
 impl Default for ColourSpec {

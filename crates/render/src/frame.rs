@@ -10,8 +10,10 @@ use quadric::nalgebra::Vector3;
 use crate::camera::Camera;
 use crate::error::Error;
 use crate::limits::{MAX_PIXELS, MAX_THREADS};
+use crate::path::{PathOptions, PathTracer};
+use crate::sampling::Sampler;
 use crate::shade::{PrimaryHit, Scratch, Shader};
-use crate::world::World;
+use crate::world::{Integrator, World};
 
 /// One pixel of every output channel (read out of a [`Frame`]'s planes by
 /// [`Frame::at`]).
@@ -30,6 +32,11 @@ pub struct Pixel {
     pub block: u32,
     /// 1-based solid index within the block, 0 on a miss.
     pub object: u32,
+    /// The samples the pixel took (adaptive sampling only, else 0).
+    pub spp: u32,
+    /// The estimated relative standard error of the pixel's mean luminance
+    /// (adaptive sampling only, else 0).
+    pub error: f32,
 }
 
 /// A rendered image: one plane per output channel (the channels of
@@ -59,16 +66,22 @@ pub struct Frame {
     pub block: Vec<u32>,
     /// 1-based solid index within the block, 0 on a miss.
     pub object: Vec<u32>,
+    /// Adaptive sampling only (else empty): the samples each pixel took.
+    pub spp: Vec<u32>,
+    /// Adaptive sampling only (else empty): the estimated relative standard
+    /// error of each pixel's mean luminance.
+    pub error: Vec<f32>,
 }
 
 impl Frame {
     /// A frame of `width × height` pixels, every sample zero. The planes are
     /// allocated zeroed (`vec![0.0; n]`), so their pages are mapped only
     /// when first written.
-    fn zeroed(width: u32, height: u32, aovs: bool) -> Self {
+    fn zeroed(width: u32, height: u32, aovs: bool, adaptive: bool) -> Self {
         let n = width as usize * height as usize;
         let f = || vec![0.0f32; n];
         let a = if aovs { n } else { 0 };
+        let s = if adaptive { n } else { 0 };
         Frame {
             width,
             height,
@@ -78,7 +91,15 @@ impl Frame {
             normal: [vec![0.0; a], vec![0.0; a], vec![0.0; a]],
             block: vec![0; a],
             object: vec![0; a],
+            spp: vec![0; s],
+            error: vec![0.0; s],
         }
+    }
+
+    /// Whether the frame holds the adaptive sampling planes (`spp`,
+    /// `error`).
+    pub fn has_adaptive(&self) -> bool {
+        !self.spp.is_empty() && self.spp.len() == self.alpha.len() && self.error.len() == self.alpha.len()
     }
 
     /// Whether the frame holds the AOV planes (`Z`, the normal, the ids):
@@ -114,8 +135,9 @@ impl Frame {
     /// If `k` is not below [`Frame::len`].
     pub fn pixel(&self, k: usize) -> Pixel {
         let (rgb, alpha) = (self.rgb.each_ref().map(|c| c[k]), self.alpha[k]);
+        let (spp, error) = if self.has_adaptive() { (self.spp[k], self.error[k]) } else { (0, 0.0) };
         if !self.has_aovs() {
-            return Pixel { rgb, alpha, ..Pixel::default() };
+            return Pixel { rgb, alpha, spp, error, ..Pixel::default() };
         }
         Pixel {
             rgb,
@@ -124,6 +146,8 @@ impl Frame {
             normal: self.normal.each_ref().map(|c| c[k]),
             block: self.block[k],
             object: self.object[k],
+            spp,
+            error,
         }
     }
 
@@ -144,8 +168,10 @@ impl Frame {
     /// The frame cut into runs of `chunk` pixels (the last may be shorter),
     /// each writable on its own.
     fn runs_mut(&mut self, chunk: usize) -> Vec<Run<'_>> {
-        let aovs = self.has_aovs();
-        let Frame { rgb: [r, g, b], alpha, depth, normal: [nx, ny, nz], block, object, .. } = self;
+        let (aovs, adaptive) = (self.has_aovs(), self.has_adaptive());
+        let Frame { rgb: [r, g, b], alpha, depth, normal: [nx, ny, nz], block, object, spp, error, .. } = self;
+        let mut spp = spp.chunks_mut(chunk);
+        let mut error = error.chunks_mut(chunk);
         let mut colour = [r, g, b, alpha].map(|p| p.chunks_mut(chunk));
         // Without AOVs their planes are empty, and so is each run's share.
         let mut f32s = [depth, nx, ny, nz].map(|p| p.chunks_mut(chunk));
@@ -163,7 +189,15 @@ impl Frame {
             } else {
                 (Default::default(), Default::default())
             };
-            runs.push(Run { rgb: [r, g, b], alpha, depth, normal: [nx, ny, nz], block, object });
+            let (spp, error) = if adaptive {
+                match (spp.next(), error.next()) {
+                    (Some(s), Some(e)) => (s, e),
+                    _ => return runs,
+                }
+            } else {
+                (Default::default(), Default::default())
+            };
+            runs.push(Run { rgb: [r, g, b], alpha, depth, normal: [nx, ny, nz], block, object, spp, error });
         }
     }
 }
@@ -183,6 +217,8 @@ struct Run<'a> {
     normal: [&'a mut [f32]; 3],
     block: &'a mut [u32],
     object: &'a mut [u32],
+    spp: &'a mut [u32],
+    error: &'a mut [f32],
 }
 
 impl Run<'_> {
@@ -206,6 +242,8 @@ impl Run<'_> {
         plane(self.depth, pixels, |p| p.depth);
         plane(self.block, pixels, |p| p.block);
         plane(self.object, pixels, |p| p.object);
+        plane(self.spp, pixels, |p| p.spp);
+        plane(self.error, pixels, |p| p.error);
     }
 }
 
@@ -218,7 +256,7 @@ thread_local! {
 
 /// Renders the run of rows from `i0` on (see [`render_rows`]) into `out`,
 /// through the worker's [`TASK_PIXELS`].
-fn render_run(shader: &Shader, i0: u32, out: &mut Run) -> u64 {
+fn render_run(renderer: &Renderer, i0: u32, out: &mut Run) -> u64 {
     let n = out.len();
     let mut fresh = Vec::new();
     TASK_PIXELS.with(|buf| {
@@ -227,7 +265,10 @@ fn render_run(shader: &Shader, i0: u32, out: &mut Run) -> u64 {
         if buf.len() < n {
             buf.resize(n, Pixel::default());
         }
-        let rays = render_rows(shader, i0, &mut buf[..n]);
+        let rays = match &renderer.sampled {
+            Some(sampled) => sampled_rows(&renderer.shader, sampled, i0, &mut buf[..n]),
+            None => render_rows(&renderer.shader, i0, &mut buf[..n]),
+        };
         out.fill(&buf[..n]);
         rays
     })
@@ -252,6 +293,8 @@ impl Stats {
 /// Render options beyond the scene.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Options {
+    /// Switches of the path integrator (both on by default).
+    pub path: PathOptions,
     /// Worker threads (default: one per core).
     pub threads: Option<usize>,
     /// Only the colour and alpha planes: the frame's AOV planes (`Z`, the
@@ -322,10 +365,11 @@ pub fn render_until(
     // (a collected list of rows would double the peak memory). Its pages are
     // first touched here, by the workers, in parallel.
     let width = world.camera.width() as usize;
-    let mut frame = Frame::zeroed(world.camera.width(), world.camera.height(), !options.colour_only);
+    // One renderer for the frame, shared by the workers.
+    let renderer = Renderer::new(world, options.path);
+    let adaptive = renderer.sampled.as_ref().is_some_and(|s| s.noise.is_some());
+    let mut frame = Frame::zeroed(world.camera.width(), world.camera.height(), !options.colour_only, adaptive);
     let runs = frame.runs_mut(width * ROWS);
-    // One shader for the frame, shared by the workers.
-    let shader = Shader::new(world);
     // Every band of rows is its own task, taken in order from one queue by
     // whichever worker is free: rows differ in cost by orders of
     // magnitude (sky against glass), so a split made early from the thread
@@ -345,7 +389,7 @@ pub fn render_until(
                 if cancel.load(Ordering::Relaxed) {
                     break;
                 }
-                rays += render_run(&shader, (b * ROWS) as u32, &mut out);
+                rays += render_run(&renderer, (b * ROWS) as u32, &mut out);
                 for _ in 0..out.len() / width {
                     progress();
                 }
@@ -359,6 +403,144 @@ pub fn render_until(
         return Err(Error::Interrupted);
     }
     Ok((frame, Stats { rays, elapsed }))
+}
+
+/// The smallest number of samples a pixel takes under adaptive sampling
+/// (`settings.noise`, `--noise`), unless `spp` is smaller: fewer give too
+/// poor an estimate of the pixel's variance to stop on.
+pub const MIN_ADAPTIVE_SPP: u32 = 16;
+
+/// Under adaptive sampling, a pixel not yet within its error bound takes
+/// this many samples more before it is checked again.
+const ADAPTIVE_BATCH: u32 = 8;
+
+/// How the pixels of a render are estimated, shared by the workers.
+struct Renderer<'w> {
+    shader: Shader<'w>,
+    /// `Some` when pixels take random samples (docs/model.md §5.10.5):
+    /// under the path integrator, or when `settings.spp` is given.
+    sampled: Option<Sampled<'w>>,
+}
+
+/// Random sampling of pixels.
+struct Sampled<'w> {
+    /// The path integrator; `None`: Whitted shading of each sample.
+    tracer: Option<PathTracer<'w>>,
+    /// Samples per pixel (the most, under adaptive sampling).
+    spp: u32,
+    /// Adaptive sampling's bound on the relative standard error.
+    noise: Option<f64>,
+    seed: u64,
+}
+
+impl<'w> Renderer<'w> {
+    fn new(world: &'w World, path: PathOptions) -> Self {
+        let s = &world.settings;
+        let shader = Shader::new(world);
+        let is_path = s.integrator == Integrator::Path;
+        if !is_path && s.spp.is_none() && s.noise.is_none() {
+            return Renderer { shader, sampled: None };
+        }
+        let tracer = is_path.then(|| PathTracer::new(world, path));
+        let spp = s.spp.unwrap_or(s.samples.max(1).saturating_mul(s.samples.max(1)));
+        Renderer { shader, sampled: Some(Sampled { tracer, spp, noise: s.noise, seed: s.seed }) }
+    }
+}
+
+/// Whether an error estimate (perhaps NaN or infinite) is within the bound.
+fn within(error: f64, bound: f64) -> bool {
+    error <= bound
+}
+
+/// The luminance of linear Rec. 709 RGB.
+fn luminance(c: &Vector3<f64>) -> f64 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// The relative standard error of a mean of `n` samples from Welford's
+/// running `mean` and sum of squared deviations `m2`: `0` for samples all
+/// zero, `∞` for fewer than two or a zero mean of samples not all zero.
+fn relative_error(mean: f64, m2: f64, n: u32) -> f64 {
+    if n < 2 {
+        return f64::INFINITY;
+    }
+    let n = f64::from(n);
+    let se = (m2.max(0.0) / (n - 1.0) / n).sqrt();
+    if se == 0.0 {
+        0.0
+    } else if mean > 0.0 {
+        se / mean
+    } else {
+        f64::INFINITY
+    }
+}
+
+impl Sampled<'_> {
+    /// Pixel `(i, j)`: the mean of its samples, each a ray through a random
+    /// point of the pixel (a box filter) and of the lens; the AOVs of the
+    /// pinhole ray through its centre. Under adaptive sampling, the pixel
+    /// takes [`MIN_ADAPTIVE_SPP`] samples, then [`ADAPTIVE_BATCH`] more at a
+    /// time until the relative standard error of its mean luminance is
+    /// within `noise` or it has `spp`.
+    fn pixel(&self, shader: &Shader, cam: &Camera, (i, j): (u32, u32), scratch: &mut Scratch) -> Pixel {
+        let hit = shader.primary_hit(&cam.ray(i, j), scratch);
+        let key = u64::from(i) * u64::from(cam.width()) + u64::from(j);
+        let mut target = if self.noise.is_some() { MIN_ADAPTIVE_SPP.min(self.spp) } else { self.spp };
+        let (mut sum, mut covered, mut n) = (Vector3::zeros(), 0u32, 0u32);
+        let (mut mean, mut m2) = (0.0, 0.0);
+        loop {
+            while n < target {
+                let sampler = Sampler::new(self.seed, key, u64::from(n));
+                let [u, v] = sampler.uniform2(0);
+                let lens = sampler.uniform2(2);
+                let ray = cam.lens_ray(f64::from(i) + u - 0.5, f64::from(j) + v - 0.5, (lens[0], lens[1]));
+                let (mut c, h) = match &self.tracer {
+                    Some(t) => t.radiance(&ray, &sampler, scratch),
+                    None => {
+                        let (c, h) = shader.primary(&ray, scratch);
+                        (c, h.is_some())
+                    }
+                };
+                // A non-finite sample (an overflow) would poison the pixel:
+                // it counts as black.
+                if !c.iter().all(|x| x.is_finite()) {
+                    c = Vector3::zeros();
+                }
+                n += 1;
+                sum += c;
+                covered += u32::from(h);
+                let y = luminance(&c);
+                let delta = y - mean;
+                mean += delta / f64::from(n);
+                m2 += delta * (y - mean);
+            }
+            match self.noise {
+                Some(t) if n < self.spp && !within(relative_error(mean, m2, n), t) => {
+                    target = n.saturating_add(ADAPTIVE_BATCH).min(self.spp);
+                }
+                _ => break,
+            }
+        }
+        let mut p = pixel_of(sum / f64::from(n), (f64::from(covered) / f64::from(n)) as f32, hit);
+        if self.noise.is_some() {
+            p.spp = n;
+            p.error = relative_error(mean, m2, n) as f32;
+        }
+        p
+    }
+}
+
+/// Renders the rows from `i0` on into `out` (whole rows), each pixel from
+/// its random samples.
+fn sampled_rows(shader: &Shader, sampled: &Sampled, i0: u32, out: &mut [Pixel]) -> u64 {
+    let mut scratch = Scratch::default();
+    let cam = &shader.world().camera;
+    let width = cam.width() as usize;
+    for (k, pixel) in out.iter_mut().enumerate() {
+        let at = (i0 + (k / width) as u32, (k % width) as u32);
+        *pixel = sampled.pixel(shader, cam, at, &mut scratch);
+    }
+    scratch.rays
 }
 
 /// Rows per render task (a band): a multiple of two, so that four rays of
@@ -494,6 +676,7 @@ fn pixel_of(c: Vector3<f64>, alpha: f32, hit: Option<PrimaryHit>) -> Pixel {
             normal: [s.normal.x as f32, s.normal.y as f32, s.normal.z as f32],
             block: s.block.0 + 1,
             object: s.solid + 1,
+            ..Pixel::default()
         },
     }
 }

@@ -30,6 +30,7 @@ fn material(diffuse: [f64; 3], specular: f64, shininess: f64, reflect: f64) -> M
         reflect: ColourSpec::Rgb([reflect; 3]),
         transmit: ColourSpec::Rgb([0.0; 3]),
         ior: 1.0,
+        emission: ColourSpec::default(),
         bump: None,
     }
 }

@@ -5,8 +5,9 @@
 //! `SceneFile::to_world`), the camera of docs/model.md §4 ([`camera`]),
 //! Whitted-style shading of docs/model.md §5 ([`shade`]), the parallel render loop
 //! ([`frame`]) and the OpenEXR and PNG writers ([`exr`], [`png`]). The path
-//! tracer's building blocks of docs/model.md §5.8 are [`sampling`] (random
-//! numbers), [`warp`] (warps and their densities) and [`bsdf`] (the lobes). Only this
+//! integrator of docs/model.md §5.10 is [`path`], built from [`sampling`]
+//! (random numbers), [`warp`] (warps and their densities), [`bsdf`] (the
+//! lobes) and [`lobes`] (a material as a sum of lobes). Only this
 //! crate knows JSON and image formats; the kernel crates `quadric` and
 //! `complex` stay plain geometry.
 //!
@@ -38,9 +39,11 @@ pub mod format;
 pub mod frame;
 pub mod generate;
 pub mod limits;
+pub mod lobes;
 mod locate;
 pub mod measure;
 pub mod output;
+pub mod path;
 pub mod png;
 pub mod pov;
 pub mod rays;

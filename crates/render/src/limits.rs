@@ -20,3 +20,8 @@ pub const MAX_GROUP_DEPTH: usize = 100;
 /// The largest `settings.max_depth`: shading recurses once per bounce, so an
 /// unbounded depth could overflow a worker thread's stack.
 pub const MAX_BOUNCES: u32 = 64;
+
+/// The most samples per pixel (`settings.spp`, `--spp`): a pixel's samples
+/// are counted in a `u32` channel and their random numbers keyed by the
+/// sample's number.
+pub const MAX_SPP: u32 = 1 << 24;

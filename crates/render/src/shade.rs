@@ -32,16 +32,16 @@ pub struct PrimaryHit {
 
 /// The first visible surface event along a ray.
 #[derive(Clone, Copy, Debug)]
-struct Event {
-    t: f64,
-    point: Point3<f64>,
+pub(crate) struct Event {
+    pub(crate) t: f64,
+    pub(crate) point: Point3<f64>,
     /// Outward normal of the surface's block.
-    normal: Vector3<f64>,
-    block: BlockId,
-    solid: u32,
+    pub(crate) normal: Vector3<f64>,
+    pub(crate) block: BlockId,
+    pub(crate) solid: u32,
     /// Owner of the ray just before and just after the event.
-    before: Option<BlockId>,
-    after: Option<BlockId>,
+    pub(crate) before: Option<BlockId>,
+    pub(crate) after: Option<BlockId>,
 }
 
 /// Per-thread scratch space and counters.
@@ -54,6 +54,8 @@ pub struct Scratch {
     occluders: [[complex::Occluder; 2]; OCCLUDERS],
     /// Rays cast so far (primary, shadow, reflected, refracted).
     pub rays: u64,
+    /// The hint of the path integrator's shadow rays.
+    pub(crate) path_occluder: complex::Occluder,
 }
 
 /// Lights with a shadow-ray hint of their own in [`Scratch`]; further
@@ -83,7 +85,7 @@ pub struct Shader<'w> {
 /// Without a branch per channel: the only NaN product of two such factors
 /// is `0 · ∞`, which gives `+0`, and `+ 0.0` turns a zero product's sign
 /// to `+` as a zero factor's result has it; every other product is itself.
-fn weigh(a: &Rgb, b: &Rgb) -> Rgb {
+pub(crate) fn weigh(a: &Rgb, b: &Rgb) -> Rgb {
     a.zip_map(b, |x, y| {
         let p = x * y;
         if p.is_nan() {
@@ -94,7 +96,7 @@ fn weigh(a: &Rgb, b: &Rgb) -> Rgb {
     })
 }
 
-fn is_zero(c: &Rgb) -> bool {
+pub(crate) fn is_zero(c: &Rgb) -> bool {
     c.iter().all(|x| *x == 0.0)
 }
 
@@ -165,7 +167,7 @@ impl<'w> Shader<'w> {
     /// The first event after ε where something visible happens. Events
     /// between two transparent blocks of the same material are skipped:
     /// they are one medium (docs/model.md §3.7).
-    fn first_event(&self, ray: &Ray, scratch: &mut Scratch) -> Option<Event> {
+    pub(crate) fn first_event(&self, ray: &Ray, scratch: &mut Scratch) -> Option<Event> {
         scratch.rays += 1;
         if !self.transparent {
             return self.complex.cast_ray(ray, f64::INFINITY).map(|h| Event::of_hit(&h));
@@ -191,7 +193,7 @@ impl<'w> Shader<'w> {
         Some(block.is_transparent().then(|| self.world.block_material(id)))
     }
 
-    fn ior(&self, owner: Option<BlockId>) -> Option<f64> {
+    pub(crate) fn ior(&self, owner: Option<BlockId>) -> Option<f64> {
         match self.medium(owner) {
             None => Some(1.0),
             Some(Some(m)) => Some(m.ior),
@@ -375,7 +377,7 @@ impl<'w> Shader<'w> {
 
 impl Event {
     /// What a primary ray reports of this event for the AOVs.
-    fn primary_hit(&self, ray: &Ray) -> PrimaryHit {
+    pub(crate) fn primary_hit(&self, ray: &Ray) -> PrimaryHit {
         PrimaryHit {
             t: self.t,
             normal: facing_normal(&self.normal, &ray.direction()),
@@ -421,7 +423,7 @@ fn power(s: f64, e: f64) -> f64 {
 
 /// The unit normal turned towards the viewer; `-dir` where the surface has
 /// no normal (a cone's apex), so shading stays finite.
-fn facing_normal(outward: &Vector3<f64>, dir: &Vector3<f64>) -> Vector3<f64> {
+pub(crate) fn facing_normal(outward: &Vector3<f64>, dir: &Vector3<f64>) -> Vector3<f64> {
     if outward.iter().all(|c| *c == 0.0) {
         -dir
     } else {

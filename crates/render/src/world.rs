@@ -44,6 +44,44 @@ pub struct Settings {
     /// colours are averaged (default 1: one ray through the pixel centre).
     #[serde(default = "default_samples")]
     pub samples: u32,
+    /// The light transport algorithm: `whitted` (the default) or `path`
+    /// (docs/model.md §5.10).
+    #[serde(default, skip_serializing_if = "Integrator::is_whitted")]
+    pub integrator: Integrator,
+    /// Samples per pixel, each at a random point of the pixel (and of the
+    /// lens), for either integrator. Default: the `samples × samples` grid
+    /// for Whitted, `samples²` random samples for the path integrator.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spp: Option<u32>,
+    /// Adaptive sampling: a pixel takes samples until the estimated relative
+    /// standard error of its mean luminance is below this (at least
+    /// [`MIN_ADAPTIVE_SPP`](crate::frame::MIN_ADAPTIVE_SPP) and at most
+    /// `spp` samples). Default: every pixel takes `spp` samples.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<f64>,
+    /// The seed of the random numbers of sampled pixels: another seed,
+    /// another (equally likely) image.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub seed: u64,
+}
+
+impl Integrator {
+    /// Whether it is the default, Whitted.
+    pub fn is_whitted(&self) -> bool {
+        *self == Integrator::Whitted
+    }
+}
+
+/// The light transport algorithm of a render.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum Integrator {
+    /// Whitted ray tracing: point lights, mirrors and glass (docs/model.md §5.2–§5.6).
+    #[default]
+    Whitted,
+    /// Unidirectional path tracing of the rendering equation with next-event
+    /// estimation and multiple importance sampling (docs/model.md §5.10).
+    Path,
 }
 
 impl Default for Settings {
@@ -55,6 +93,10 @@ impl Default for Settings {
             epsilon: None,
             shadows: true,
             samples: default_samples(),
+            integrator: Integrator::Whitted,
+            spp: None,
+            noise: None,
+            seed: 0,
         }
     }
 }
@@ -67,6 +109,9 @@ fn default_max_depth() -> u32 {
 }
 fn default_samples() -> u32 {
     1
+}
+fn is_zero(x: &u64) -> bool {
+    *x == 0
 }
 fn default_true() -> bool {
     true
@@ -104,6 +149,9 @@ pub struct Material {
     pub transmit: Vector3<f64>,
     /// Index of refraction.
     pub ior: f64,
+    /// The radiance the surface emits towards the outside of its block
+    /// (the path integrator's area lights; Whitted ignores it).
+    pub emission: Vector3<f64>,
     /// The textures and bump map, if any: then the colours above are
     /// the textures' mean colours (what `pov` and `check` read), and the
     /// shader reads [`Material::at`].
@@ -124,6 +172,8 @@ pub struct Textures {
     pub reflect: Option<Texture>,
     /// Transmission weight.
     pub transmit: Option<Texture>,
+    /// Emitted radiance.
+    pub emission: Option<Texture>,
     /// Bump map.
     pub bump: Option<Bump>,
 }
@@ -144,6 +194,7 @@ impl Material {
             reflect: pick(&t.reflect, &self.reflect),
             transmit: pick(&t.transmit, &self.transmit),
             ior: self.ior,
+            emission: pick(&t.emission, &self.emission),
             textures: None,
         }
     }
@@ -154,9 +205,10 @@ impl Material {
 pub struct Light {
     /// Position.
     pub position: Point3<f64>,
-    /// Diffuse colour.
+    /// Diffuse colour; for the path integrator, the radiant intensity
+    /// (W/sr) of the light.
     pub diffuse: Vector3<f64>,
-    /// Specular colour.
+    /// Specular colour (Whitted only).
     pub specular: Vector3<f64>,
 }
 
