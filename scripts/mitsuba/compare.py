@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
 """Cross-check of komplex's path integrator against Mitsuba 3 (issue 36).
 
-For each scene (default: scenes/cornell.json and scenes/caustics.json), at the
-same image size, samples per pixel and threads:
+For each scene, at the same image size, samples per pixel and threads:
 
+0. Geometry. Mitsuba's mean hit distance over each pixel (its `depth` AOV)
+   against komplex's `Z` at the pixel centre: the camera, the pixel
+   orientation and the converted shapes line up before colours are compared.
 1. Agreement. Each renderer renders `--batches` images with independent seeds
    at `--check-spp` samples per pixel. For every region (a 4x4 grid, the
    pixels of each block as komplex's `id.block` channel sees them, and the
