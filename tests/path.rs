@@ -127,11 +127,13 @@ fn a_sphere_light_gives_the_irradiance_of_its_solid_angle() {
     assert_agrees(mean_and_error(&without, |_| true), want, "BSDF samples only");
 }
 
-/// The error of a Monte Carlo estimate falls as `spp^-½`: the RMSE of the
-/// pixels against the analytic radiance of the sphere-lit plane (found by
-/// BSDF samples only, so that there is noise to measure), at 4 to 256
-/// samples per pixel; the least-squares slope of log RMSE against log spp
-/// is −½ to within the scatter of an RMSE over 400 pixels.
+/// The error falls at least as fast as `spp^-½`, Monte Carlo's rate (the
+/// sampler's stratified pairs make it faster; a bias would make it level
+/// off): the RMSE of the pixels against the analytic radiance of the
+/// sphere-lit plane (found by BSDF samples only, so that there is noise to
+/// measure), at 4 to 256 samples per pixel. The least-squares slope of log
+/// RMSE against log spp is below −0.45 (−½ less the scatter of an RMSE over
+/// 400 pixels).
 #[test]
 fn the_error_falls_as_one_over_the_root_of_the_samples() {
     let want = 0.6 * 10.0 * (0.3f64 / 2.0).powi(2);
@@ -154,7 +156,7 @@ fn the_error_falls_as_one_over_the_root_of_the_samples() {
     let (mx, my) = (points.iter().map(|p| p.0).sum::<f64>() / n, points.iter().map(|p| p.1).sum::<f64>() / n);
     let slope = points.iter().map(|(x, y)| (x - mx) * (y - my)).sum::<f64>()
         / points.iter().map(|(x, _)| (x - mx).powi(2)).sum::<f64>();
-    assert!((slope + 0.5).abs() < 0.1, "slope {slope}: {points:?}");
+    assert!(slope < -0.45, "slope {slope}: {points:?}");
 }
 
 /// A lossless glass ball (exact Fresnel, refraction, total internal

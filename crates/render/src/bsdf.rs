@@ -292,8 +292,13 @@ mod tests {
         out
     }
 
+    /// Each of the cases is a test at the level that makes the whole family's
+    /// false-alarm rate [`ALPHA`] (Šidák's correction, as Mitsuba 3's
+    /// chi-square tests apply it).
     #[test]
     fn glossy_samples_follow_their_pdf_and_the_pdf_integrates_to_one() {
+        let cases = (glossy().len() * incident().len()) as f64;
+        let alpha = 1.0 - (1.0 - ALPHA).powf(1.0 / cases);
         for bsdf in glossy() {
             for wo in incident() {
                 // Blinn-Phong's density has an integrable 1/|wo·h| peak at
@@ -309,7 +314,7 @@ mod tests {
                 );
                 assert!((o.mass - 1.0).abs() < 1e-4, "{bsdf:?} at {wo:?}: ∫pdf = {}", o.mass);
                 assert_eq!(o.failed, 0);
-                assert!(o.p > ALPHA, "{bsdf:?} at {wo:?}: p = {}", o.p);
+                assert!(o.p > alpha, "{bsdf:?} at {wo:?}: p = {}", o.p);
             }
         }
     }

@@ -25,9 +25,10 @@ use crate::world::{Material, World};
 pub const CAMERA_DIMS: u32 = 4;
 
 /// The dimensions each bounce reads, from `CAMERA_DIMS + bounce ·
-/// DIMS_PER_BOUNCE` on: the emitter picked (`+0`), the direction towards it
-/// (`+1, +2`), the lobe picked (`+3`), the direction scattered (`+4, +5`), a
-/// dielectric's choice (`+6`), Russian roulette (`+7`).
+/// DIMS_PER_BOUNCE` on, in the stratified pairs of the [`Sampler`]: the
+/// direction towards an emitter (`+0, +1`), the direction scattered
+/// (`+2, +3`), the emitter picked and the lobe picked (`+4, +5`), a
+/// dielectric's choice and Russian roulette (`+6, +7`).
 pub const DIMS_PER_BOUNCE: u32 = 8;
 
 /// The first bounce after which Russian roulette may end a path.
@@ -207,7 +208,7 @@ impl<'w> PathTracer<'w> {
                 let direct = self.direct(&e, &lobes, &basis, &wo, &mut spawner, sampler, d, scratch);
                 l += weigh(&beta, &direct);
             }
-            let Some(s) = lobes.sample(&wo, sampler.uniform(d + 3), sampler.uniform2(d + 4), sampler.uniform(d + 6))
+            let Some(s) = lobes.sample(&wo, sampler.uniform(d + 5), sampler.uniform2(d + 2), sampler.uniform(d + 6))
             else {
                 break;
             };
@@ -290,7 +291,7 @@ impl<'w> PathTracer<'w> {
         if !self.options.next_event || self.emitters.is_empty() {
             return l;
         }
-        let pick = sampler.uniform(d);
+        let pick = sampler.uniform(d + 4);
         let mut below = 0.0;
         let emitter = self
             .emitters
@@ -300,7 +301,7 @@ impl<'w> PathTracer<'w> {
                 pick < below
             })
             .unwrap_or(&self.emitters[self.emitters.len() - 1]);
-        let (w, pdf) = emitter.sample(&e.point, sampler.uniform2(d + 1));
+        let (w, pdf) = emitter.sample(&e.point, sampler.uniform2(d));
         let light_pdf = emitter.chance * pdf;
         let wi = basis.to_local(&w);
         let f = lobes.eval(wo, &wi);

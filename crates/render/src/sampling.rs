@@ -37,26 +37,97 @@ fn absorb(h: u64, word: u64) -> u64 {
     mix(h ^ mix(word.wrapping_add(GOLDEN)))
 }
 
-/// The random numbers of one sample of one pixel: dimension `d` is the
-/// `d`-th output of a SplitMix64 stream whose state is a hash of
-/// (seed, pixel, sample). Cheap to copy and to build (three hashes), so a
-/// render makes one per pixel sample.
+/// The direction numbers of the second dimension of Sobol's sequence (the
+/// primitive polynomial `x + 1`, the rows of Pascal's triangle mod 2):
+/// `v₀ = 2³¹`, `vⱼ = vⱼ₋₁ ⊕ (vⱼ₋₁ >> 1)`.
+const SOBOL_1: [u32; 32] = {
+    let mut v = [0u32; 32];
+    v[0] = 1 << 31;
+    let mut j = 1;
+    while j < 32 {
+        v[j] = v[j - 1] ^ (v[j - 1] >> 1);
+        j += 1;
+    }
+    v
+};
+
+/// Dimension `c` (0 or 1) of point `index` of Sobol's sequence, as 32 bits
+/// of a binary fraction: the first two dimensions form a (0, 2)-sequence in
+/// base 2, so every aligned run of `2^k` points is a (0, k, 2)-net.
+#[inline]
+fn sobol(index: u32, c: u32) -> u32 {
+    if c == 0 {
+        return index.reverse_bits();
+    }
+    let (mut x, mut i, mut j) = (0, index, 0);
+    while i != 0 {
+        if i & 1 == 1 {
+            x ^= SOBOL_1[j];
+        }
+        i >>= 1;
+        j += 1;
+    }
+    x
+}
+
+/// The Laine–Karras permutation with Burley's constants (Burley 2020,
+/// "Practical Hash-based Owen Scrambling"): bit `k` of the result depends on
+/// bits `0..=k` of `x` only, each flipped as a hash of `seed` and the bits
+/// below it.
+#[inline]
+fn laine_karras(mut x: u32, seed: u32) -> u32 {
+    x = x.wrapping_add(seed);
+    x ^= x.wrapping_mul(0x6c50_b47c);
+    x ^= x.wrapping_mul(0xb82f_1e52);
+    x ^= x.wrapping_mul(0xc7af_e638);
+    x ^= x.wrapping_mul(0x8d22_f6e6);
+    x
+}
+
+/// Owen's nested uniform scramble of a binary fraction (or of an index
+/// read from its highest bit): each bit flipped as a hash of `seed` and the
+/// bits above it. A bijection that maps every aligned block of `2^k`
+/// values onto an aligned block of `2^k` values.
+#[inline]
+fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
+    laine_karras(x.reverse_bits(), seed).reverse_bits()
+}
+
+/// The random numbers of one sample of one pixel, an Owen-scrambled Sobol
+/// sequence padded in pairs of dimensions (docs/model.md §5.8.1): the
+/// dimensions `2g` and `2g + 1` of the pixel's samples `0, 1, 2, …` are the
+/// first two dimensions of Sobol's sequence, the sample number shuffled
+/// and each dimension scrambled by hashes of (seed, pixel, `g`), so that
+/// every pair is stratified on its own (any `2^k` consecutive samples form a
+/// (0, k, 2)-net) and different pairs are independent. Each value has 32
+/// such bits and 21 more from a hash. Cheap to copy and to build (two
+/// hashes), so a render makes one per pixel sample.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Sampler {
+    /// A hash of (seed, pixel, the sample number's high half).
     key: u64,
+    /// The sample number's low half: the index into the sequence.
+    index: u32,
 }
 
 impl Sampler {
     /// The sampler of sample `sample` of pixel `pixel` (any numbering, such
     /// as `row × width + column`) under the scene's `seed`.
     pub fn new(seed: u64, pixel: u64, sample: u64) -> Self {
-        Self { key: absorb(absorb(absorb(0, seed), pixel), sample) }
+        Self { key: absorb(absorb(absorb(0, seed), pixel), sample >> 32), index: sample as u32 }
     }
 
-    /// 64 random bits for dimension `d`.
+    /// 64 random bits for dimension `d`: 32 of the scrambled Sobol point
+    /// above 32 of a hash.
     #[inline]
     pub fn bits(&self, d: u32) -> u64 {
-        mix(self.key.wrapping_add(GOLDEN.wrapping_mul(u64::from(d) + 1)))
+        let group = absorb(self.key, u64::from(d / 2));
+        let index = nested_uniform_scramble(self.index, group as u32);
+        let c = d % 2;
+        let salt = mix(group.wrapping_add(GOLDEN.wrapping_mul(u64::from(c) + 1)));
+        let x = nested_uniform_scramble(sobol(index, c), (salt >> 32) as u32);
+        let low = mix(salt ^ u64::from(self.index));
+        (u64::from(x) << 32) | (low & 0xffff_ffff)
     }
 
     /// A uniform number in `[0, 1)` for dimension `d`, a multiple of 2^-53
@@ -66,7 +137,8 @@ impl Sampler {
         (self.bits(d) >> 11) as f64 * UNIT
     }
 
-    /// Two uniform numbers, dimensions `d` and `d + 1`.
+    /// Two uniform numbers, dimensions `d` and `d + 1` (a stratified pair
+    /// when `d` is even).
     #[inline]
     pub fn uniform2(&self, d: u32) -> [f64; 2] {
         [self.uniform(d), self.uniform(d.wrapping_add(1))]
@@ -148,10 +220,35 @@ mod tests {
         assert!(p > ALPHA, "{name}: p = {p}");
     }
 
+    /// Every pair of dimensions `(2g, 2g + 1)` of `2^k` consecutive samples
+    /// of a pixel is a (0, k, 2)-net: exactly one point in each of the
+    /// `2^k` boxes `[a/2^i, (a+1)/2^i) × [b/2^(k−i), (b+1)/2^(k−i))`, for
+    /// every `i` (the definition of a net, checked box by box).
+    #[test]
+    fn each_pair_of_dimensions_is_a_net_at_every_power_of_two() {
+        for k in [0u32, 1, 2, 4, 6, 8] {
+            let n = 1u64 << k;
+            for (pixel, start) in [(0u64, 0u64), (12_345, n), (77, 5 * n)] {
+                for g in [0u32, 1, 2, 7, 30] {
+                    let points: Vec<[f64; 2]> =
+                        (start..start + n).map(|s| Sampler::new(3, pixel, s).uniform2(2 * g)).collect();
+                    for i in 0..=k {
+                        let (cols, rows) = (1u64 << i, 1u64 << (k - i));
+                        let mut seen = vec![false; n as usize];
+                        for [u, v] in &points {
+                            let cell = (u * cols as f64) as u64 * rows + (v * rows as f64) as u64;
+                            assert!(!seen[cell as usize], "k {k}, pixel {pixel}, pair {g}, boxes {cols}x{rows}");
+                            seen[cell as usize] = true;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn neighbouring_pixels_samples_dimensions_and_seeds_are_uncorrelated() {
         assert_pairs_uniform("pixels", |i| (Sampler::new(9, i, 0).uniform(0), Sampler::new(9, i + 1, 0).uniform(0)));
-        assert_pairs_uniform("samples", |i| (Sampler::new(9, 17, i).uniform(0), Sampler::new(9, 17, i + 1).uniform(0)));
         assert_pairs_uniform("dimensions", |i| {
             let s = Sampler::new(9, i, 3);
             (s.uniform(4), s.uniform(5))
