@@ -204,12 +204,14 @@ impl<'w> PathTracer<'w> {
             let surface = Surface { block: e.block, solid: e.solid };
             let mut spawner = world.complex.spawner_with_normal(surface, &e.point, &e.normal);
             let d = CAMERA_DIMS + bounce * DIMS_PER_BOUNCE;
+            let [pick_emitter, pick_lobe] = sampler.uniform2(d + 4);
+            let [choice, roulette] = sampler.uniform2(d + 6);
             if lobes.has_glossy() {
-                let direct = self.direct(&e, &lobes, &basis, &wo, &mut spawner, sampler, d, scratch);
+                let light = (pick_emitter, sampler.uniform2(d));
+                let direct = self.direct(&e, &lobes, &basis, &wo, &mut spawner, light, scratch);
                 l += weigh(&beta, &direct);
             }
-            let Some(s) = lobes.sample(&wo, sampler.uniform(d + 5), sampler.uniform2(d + 2), sampler.uniform(d + 6))
-            else {
+            let Some(s) = lobes.sample(&wo, pick_lobe, sampler.uniform2(d + 2), choice) else {
                 break;
             };
             beta = weigh(&beta, &s.weight);
@@ -221,7 +223,7 @@ impl<'w> PathTracer<'w> {
             if self.options.roulette && bounce + 1 >= ROULETTE_DEPTH {
                 // Survive with probability `1 − q`, weighted by `1/(1 − q)`: unbiased.
                 let q = (1.0 - beta.max()).max(0.0);
-                if sampler.uniform(d + 7) < q {
+                if roulette < q {
                     break;
                 }
                 beta /= 1.0 - q;
@@ -259,8 +261,8 @@ impl<'w> PathTracer<'w> {
     }
 
     /// Light arriving directly at the event's point and scattered towards
-    /// `wo`: from every point light, and from one emitter picked at random,
-    /// weighted against BSDF sampling.
+    /// `wo`: from every point light, and from one emitter picked at random
+    /// (by `pick`, its direction by `u`), weighted against BSDF sampling.
     #[allow(clippy::too_many_arguments)]
     fn direct(
         &self,
@@ -269,8 +271,7 @@ impl<'w> PathTracer<'w> {
         basis: &Basis,
         wo: &Vector3<f64>,
         spawner: &mut Spawner,
-        sampler: &Sampler,
-        d: u32,
+        (pick, u): (f64, [f64; 2]),
         scratch: &mut Scratch,
     ) -> Rgb {
         let mut l = Rgb::zeros();
@@ -291,7 +292,6 @@ impl<'w> PathTracer<'w> {
         if !self.options.next_event || self.emitters.is_empty() {
             return l;
         }
-        let pick = sampler.uniform(d + 4);
         let mut below = 0.0;
         let emitter = self
             .emitters
@@ -301,7 +301,7 @@ impl<'w> PathTracer<'w> {
                 pick < below
             })
             .unwrap_or(&self.emitters[self.emitters.len() - 1]);
-        let (w, pdf) = emitter.sample(&e.point, sampler.uniform2(d));
+        let (w, pdf) = emitter.sample(&e.point, u);
         let light_pdf = emitter.chance * pdf;
         let wi = basis.to_local(&w);
         let f = lobes.eval(wo, &wi);

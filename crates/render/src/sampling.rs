@@ -51,24 +51,30 @@ const SOBOL_1: [u32; 32] = {
     v
 };
 
-/// Dimension `c` (0 or 1) of point `index` of Sobol's sequence, as 32 bits
-/// of a binary fraction: the first two dimensions form a (0, 2)-sequence in
-/// base 2, so every aligned run of `2^k` points is a (0, k, 2)-net.
-#[inline]
-fn sobol(index: u32, c: u32) -> u32 {
-    if c == 0 {
-        return index.reverse_bits();
-    }
-    let (mut x, mut i, mut j) = (0, index, 0);
-    while i != 0 {
-        if i & 1 == 1 {
-            x ^= SOBOL_1[j];
+/// [`SOBOL_1`] folded by byte and bit-reversed: entry `[b][v]` is the XOR
+/// of the direction numbers `8b … 8b + 7` selected by the bits of `v`,
+/// reversed, so that a point (reversed, as [`Sampler::pair`] scrambles it)
+/// is four lookups.
+const SOBOL_1_BYTES: [[u32; 256]; 4] = {
+    let mut t = [[0u32; 256]; 4];
+    let mut b = 0;
+    while b < 4 {
+        let mut v = 0;
+        while v < 256 {
+            let (mut x, mut j) = (0u32, 0);
+            while j < 8 {
+                if (v >> j) & 1 == 1 {
+                    x ^= SOBOL_1[8 * b + j];
+                }
+                j += 1;
+            }
+            t[b][v] = x.reverse_bits();
+            v += 1;
         }
-        i >>= 1;
-        j += 1;
+        b += 1;
     }
-    x
-}
+    t
+};
 
 /// The Laine–Karras permutation with Burley's constants (Burley 2020,
 /// "Practical Hash-based Owen Scrambling"): bit `k` of the result depends on
@@ -84,15 +90,6 @@ fn laine_karras(mut x: u32, seed: u32) -> u32 {
     x
 }
 
-/// Owen's nested uniform scramble of a binary fraction (or of an index
-/// read from its highest bit): each bit flipped as a hash of `seed` and the
-/// bits above it. A bijection that maps every aligned block of `2^k`
-/// values onto an aligned block of `2^k` values.
-#[inline]
-fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
-    laine_karras(x.reverse_bits(), seed).reverse_bits()
-}
-
 /// The random numbers of one sample of one pixel, an Owen-scrambled Sobol
 /// sequence padded in pairs of dimensions (docs/model.md §5.8.1): the
 /// dimensions `2g` and `2g + 1` of the pixel's samples `0, 1, 2, …` are the
@@ -106,28 +103,46 @@ fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
 pub struct Sampler {
     /// A hash of (seed, pixel, the sample number's high half).
     key: u64,
-    /// The sample number's low half: the index into the sequence.
-    index: u32,
+    /// The sample number's low half (the index into the sequence),
+    /// bit-reversed.
+    reversed: u32,
 }
 
 impl Sampler {
     /// The sampler of sample `sample` of pixel `pixel` (any numbering, such
     /// as `row × width + column`) under the scene's `seed`.
     pub fn new(seed: u64, pixel: u64, sample: u64) -> Self {
-        Self { key: absorb(absorb(absorb(0, seed), pixel), sample >> 32), index: sample as u32 }
+        Self { key: absorb(absorb(absorb(0, seed), pixel), sample >> 32), reversed: (sample as u32).reverse_bits() }
+    }
+
+    /// The pair `g` (dimensions `2g`, `2g + 1`) as 32-bit binary
+    /// fractions, with the hash the bits below them come from: with
+    /// `S(x, s) = rev(LK(rev(x), s))`, the shuffled index
+    /// `i' = S(i, s_i)`, and Sobol's first two dimensions of it, `rev(i')`
+    /// and `sobol₁(i')`, each scrambled by `S`. The reversals that cancel
+    /// are left out: `i` is kept reversed, `S(rev(i'), s₀) = rev(LK(i', s₀))`,
+    /// and the table holds `rev(sobol₁)`.
+    #[inline]
+    fn pair(&self, g: u32) -> ([u32; 2], u64) {
+        let group = mix(self.key ^ GOLDEN.wrapping_mul(u64::from(g) + 1));
+        let salt = mix(group);
+        let index = laine_karras(self.reversed, group as u32).reverse_bits();
+        let [b0, b1, b2, b3] = index.to_le_bytes();
+        let t = &SOBOL_1_BYTES;
+        let second = t[0][b0 as usize] ^ t[1][b1 as usize] ^ t[2][b2 as usize] ^ t[3][b3 as usize];
+        // rev(i') scrambled: rev(LK(rev(rev(i')), s₀)) = rev(LK(i', s₀)).
+        let x = laine_karras(index, (group >> 32) as u32).reverse_bits();
+        let y = laine_karras(second, salt as u32).reverse_bits();
+        ([x, y], salt)
     }
 
     /// 64 random bits for dimension `d`: 32 of the scrambled Sobol point
-    /// above 32 of a hash.
+    /// above 32 of a hash of (seed, pixel, the pair).
     #[inline]
     pub fn bits(&self, d: u32) -> u64 {
-        let group = absorb(self.key, u64::from(d / 2));
-        let index = nested_uniform_scramble(self.index, group as u32);
-        let c = d % 2;
-        let salt = mix(group.wrapping_add(GOLDEN.wrapping_mul(u64::from(c) + 1)));
-        let x = nested_uniform_scramble(sobol(index, c), (salt >> 32) as u32);
-        let low = mix(salt ^ u64::from(self.index));
-        (u64::from(x) << 32) | (low & 0xffff_ffff)
+        let (xy, low) = self.pair(d / 2);
+        let c = (d % 2) as usize;
+        (u64::from(xy[c]) << 32) | ((low >> (32 * c)) & 0xffff_ffff)
     }
 
     /// A uniform number in `[0, 1)` for dimension `d`, a multiple of 2^-53
@@ -137,11 +152,16 @@ impl Sampler {
         (self.bits(d) >> 11) as f64 * UNIT
     }
 
-    /// Two uniform numbers, dimensions `d` and `d + 1` (a stratified pair
-    /// when `d` is even).
+    /// Two uniform numbers, dimensions `d` and `d + 1`: for an even `d`, a
+    /// stratified pair, computed together.
     #[inline]
     pub fn uniform2(&self, d: u32) -> [f64; 2] {
-        [self.uniform(d), self.uniform(d.wrapping_add(1))]
+        if d % 2 == 1 {
+            return [self.uniform(d), self.uniform(d.wrapping_add(1))];
+        }
+        let ([x, y], low) = self.pair(d / 2);
+        let f = |hi: u32, lo: u64| (((u64::from(hi) << 32) | (lo & 0xffff_ffff)) >> 11) as f64 * UNIT;
+        [f(x, low), f(y, low >> 32)]
     }
 }
 
