@@ -70,6 +70,36 @@ fn check_summarises_and_warns() {
 }
 
 #[test]
+fn check_warns_of_no_lights_only_when_nothing_lights_the_scene() {
+    let dir = tempdir();
+    // No point light: Whitted sees only ambient light; the path integrator is lit by an
+    // emissive block or by the background, and by nothing when both are black.
+    let scene = |integrator: &str, emission: &str, background: &str| {
+        format!(
+            r#"{{ "camera": {{ "eye": [0, 0, 5], "direction": [0, 0, -1] }},
+                 "settings": {{ "integrator": "{integrator}", "background": {background} }},
+                 "materials": {{ "lamp": {{ "emission": {emission} }} }},
+                 "blocks": [ {{ "material": "lamp", "objects": [ {{ "sphere": {{}} }} ] }} ] }}"#
+        )
+    };
+    for (integrator, emission, background, warns) in [
+        ("whitted", "[1, 1, 1]", "[0.5, 0.5, 0.5]", true),
+        ("path", "[1, 1, 1]", "[0, 0, 0]", false),
+        ("path", "[0, 0, 0]", "[0.5, 0.5, 0.5]", false),
+        ("path", "[0, 0, 0]", "[0, 0, 0]", true),
+    ] {
+        let p = write_scene(dir.path(), "s.json", &scene(integrator, emission, background));
+        let o = komplex_ok(dir.path(), &["check", p.to_str().unwrap()]);
+        let out = String::from_utf8_lossy(&o.stdout);
+        assert_eq!(
+            out.contains("no lights"),
+            warns,
+            "{integrator}, emission {emission}, background {background}:\n{out}"
+        );
+    }
+}
+
+#[test]
 fn scenes_validate_against_the_schema_and_bad_ones_do_not() {
     let dir = tempdir();
     let cam = r#""camera": { "eye": [0, 0, 5], "direction": [0, 0, -1] }"#;

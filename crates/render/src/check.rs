@@ -6,7 +6,7 @@ use std::fmt;
 use complex::BlockId;
 use quadric::nalgebra::Vector3;
 
-use crate::world::World;
+use crate::world::{Integrator, World};
 
 /// What `check` found.
 #[derive(Clone, Debug, PartialEq)]
@@ -80,7 +80,11 @@ pub fn check(world: &World) -> Report {
         }
     }
     opaque_overlaps(world, &mut warnings);
-    if world.lights.is_empty() {
+    // The path integrator is also lit by emissive blocks and the background.
+    let path_lit = world.settings.integrator == Integrator::Path
+        && (world.materials().iter().any(|m| m.emission.max() > 0.0)
+            || world.settings.background.iter().any(|c| *c > 0.0));
+    if world.lights.is_empty() && !path_lit {
         warnings.push("the scene has no lights: only ambient light, reflection and refraction".into());
     }
     let used: Vec<bool> = (0..world.materials().len())
