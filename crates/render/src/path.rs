@@ -32,7 +32,7 @@ pub const CAMERA_DIMS: u32 = 4;
 pub const DIMS_PER_BOUNCE: u32 = 8;
 
 /// The first bounce after which Russian roulette may end a path.
-pub const ROULETTE_DEPTH: u32 = 3;
+pub const ROULETTE_DEPTH: u32 = 5;
 
 /// Switches of the path integrator that change the noise of an image, not
 /// its expectation (the tests compare images made with and without them).
