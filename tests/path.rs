@@ -79,6 +79,26 @@ fn a_closed_furnace_converges_to_emission_over_one_minus_albedo() {
     }
 }
 
+/// A lossless glass ball inside the closed furnace changes nothing: the
+/// radiance is `E/(1 − ρ)` on the wall seen directly and through the ball,
+/// along paths that alternate between the diffuse wall (light samples,
+/// blocked by the glass, and BSDF samples weighed against them) and the
+/// glass (refraction, Fresnel reflection inside and out).
+#[test]
+fn a_glass_ball_in_the_closed_furnace_changes_nothing() {
+    let frame = render(
+        r#"{ "camera": { "eye": [0, 0, 6], "direction": [0, 0, -1], "width": 24, "height": 18, "aperture": 80 },
+             "settings": { "integrator": "path", "spp": 32, "max_depth": 64 },
+             "materials": { "wall": { "diffuse": [0.5, 0.5, 0.5], "emission": [1.5, 1.5, 1.5] },
+                            "glass": { "transmit": [1, 1, 1], "ior": 1.5 } },
+             "blocks": [ { "material": "glass", "transparent": true, "objects": [ { "sphere": { "radius": 2 } } ] },
+                         { "material": "wall",
+                           "objects": [ { "quadric": [-1, -1, -1, 0, 0, 0, 0, 0, 0, 100] }, { "sphere": { "radius": 12 } } ] } ] }"#,
+    );
+    assert_agrees(mean_and_error(&frame, |k| frame.block[k] == 1), 3.0, "through the ball");
+    assert_agrees(mean_and_error(&frame, |k| frame.block[k] == 2), 3.0, "the wall");
+}
+
 /// A plane of albedo ρ seen under a point light of intensity `I` at height
 /// `h` straight above the point the camera looks at: `L = ρ/π · I/h²`
 /// (the light's radiant intensity, W/sr, falls off with `h²`). Nothing else
