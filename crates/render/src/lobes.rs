@@ -43,6 +43,10 @@ pub struct LobeSample {
     pub pdf: f64,
     /// Whether a delta lobe (mirror, dielectric) was sampled.
     pub delta: bool,
+    /// `(ηt/ηi)²` for a refraction (else 1): the radiance scaling the weight
+    /// holds, which Russian roulette undoes so that a path inside glass is
+    /// not stopped for it (pbrt-v4's `etaScale`).
+    pub eta_scale: f64,
 }
 
 impl Lobes {
@@ -130,14 +134,21 @@ impl Lobes {
         let s = bsdf.sample(wo, u, uc)?;
         if s.delta {
             let weight = colour * (s.weight() / self.chance[k]);
-            return Some(LobeSample { wi: s.wi, weight, pdf: 0.0, delta: true });
+            let eta_scale = match bsdf {
+                Bsdf::Dielectric { eta } if s.wi.z * wo.z < 0.0 => {
+                    let ratio = if wo.z > 0.0 { eta } else { 1.0 / eta };
+                    ratio * ratio
+                }
+                _ => 1.0,
+            };
+            return Some(LobeSample { wi: s.wi, weight, pdf: 0.0, delta: true, eta_scale });
         }
         let pdf = self.pdf(wo, &s.wi);
         if pdf <= 0.0 {
             return None;
         }
         let weight = self.eval(wo, &s.wi) * (s.wi.z.abs() / pdf);
-        Some(LobeSample { wi: s.wi, weight, pdf, delta: false })
+        Some(LobeSample { wi: s.wi, weight, pdf, delta: false, eta_scale: 1.0 })
     }
 }
 
@@ -203,9 +214,11 @@ mod tests {
             if x.wi.z > 0.0 {
                 refl += 1;
                 assert!((x.weight.x - 1.0).abs() < 1e-12);
+                assert_eq!(x.eta_scale, 1.0);
             } else {
                 trans += 1;
                 assert!((x.weight.x - 1.0 / (1.5 * 1.5)).abs() < 1e-12);
+                assert!((x.weight.x * x.eta_scale - 1.0).abs() < 1e-12, "the scaling undone");
             }
         }
         let p = refl as f64 / n as f64;

@@ -32,7 +32,7 @@ pub const CAMERA_DIMS: u32 = 4;
 pub const DIMS_PER_BOUNCE: u32 = 8;
 
 /// The first bounce after which Russian roulette may end a path.
-pub const ROULETTE_DEPTH: u32 = 3;
+pub const ROULETTE_DEPTH: u32 = 5;
 
 /// Switches of the path integrator that change the noise of an image, not
 /// its expectation (the tests compare images made with and without them).
@@ -172,6 +172,9 @@ impl<'w> PathTracer<'w> {
         let mut last_pdf = 0.0;
         let mut last_point = ray.origin();
         let mut hit = false;
+        // The product of the refractions' `(ηt/ηi)²`: Russian roulette reads
+        // `β` without the radiance scaling of refraction.
+        let mut eta_scale = 1.0;
         for bounce in 0..=max_depth + 1 {
             let Some(e) = self.shader.first_event(&ray, scratch) else {
                 l += weigh(&beta, &background);
@@ -215,6 +218,7 @@ impl<'w> PathTracer<'w> {
                 break;
             };
             beta = weigh(&beta, &s.weight);
+            eta_scale *= s.eta_scale;
             if is_zero(&beta) || !beta.iter().all(|c| c.is_finite()) {
                 break;
             }
@@ -222,7 +226,7 @@ impl<'w> PathTracer<'w> {
             (delta, last_pdf, last_point, ray) = (s.delta, s.pdf, e.point, next);
             if self.options.roulette && bounce + 1 >= ROULETTE_DEPTH {
                 // Survive with probability `1 − q`, weighted by `1/(1 − q)`: unbiased.
-                let q = (1.0 - beta.max()).max(0.0);
+                let q = (1.0 - (beta * eta_scale).max()).max(0.0);
                 if roulette < q {
                     break;
                 }
