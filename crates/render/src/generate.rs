@@ -18,6 +18,7 @@ use crate::format::{
     Axis, CameraSpec, ColourSpec, CylinderSpec, Entry, LightSpec, MaterialSpec, ObjectSpec, ProjectionSpec, Scale,
     SceneFile, SphereSpec, Step,
 };
+use crate::sampling::{mix, GOLDEN};
 use crate::world::{Model, Settings};
 
 fn material(diffuse: [f64; 3], specular: f64, shininess: f64, reflect: f64) -> MaterialSpec {
@@ -111,17 +112,15 @@ pub fn sphereflake(level: u32) -> SceneFile {
     }
 }
 
-/// A small deterministic generator (SplitMix64), so the same seed gives the
-/// same scene everywhere without a dependency.
+/// A small deterministic generator (SplitMix64: the sampler's output
+/// function over a counter), so the same seed gives the same scene
+/// everywhere without a dependency.
 struct Rng(u64);
 
 impl Rng {
     fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
+        self.0 = self.0.wrapping_add(GOLDEN);
+        mix(self.0)
     }
 
     /// Uniform in `[lo, hi)`.

@@ -15,7 +15,7 @@
 //! ```
 
 /// The golden-ratio increment of SplitMix64 (Steele, Lea and Flood 2014).
-const GOLDEN: u64 = 0x9e37_79b9_7f4a_7c15;
+pub(crate) const GOLDEN: u64 = 0x9e37_79b9_7f4a_7c15;
 
 /// 2^-53: the spacing of the `f64` values [`Sampler::uniform`] returns.
 const UNIT: f64 = 1.0 / (1u64 << 53) as f64;
@@ -23,7 +23,7 @@ const UNIT: f64 = 1.0 / (1u64 << 53) as f64;
 /// SplitMix64's output function (Stafford's "Mix13"): a bijection of `u64`
 /// whose every output bit depends on every input bit.
 #[inline]
-fn mix(mut z: u64) -> u64 {
+pub(crate) fn mix(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
     z ^ (z >> 31)
