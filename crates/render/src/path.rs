@@ -64,6 +64,9 @@ struct Emitter {
     radius: f64,
     /// The probability of picking this emitter.
     chance: f64,
+    /// The probability of picking this emitter or one before it: the
+    /// cumulative distribution a pick is looked up in.
+    upto: f64,
 }
 
 impl Emitter {
@@ -138,15 +141,18 @@ impl<'w> PathTracer<'w> {
                 continue;
             }
             if let Some((centre, radius)) = bounding_sphere(world, id) {
-                emitters.push(Emitter { block: id, centre, radius, chance: power * radius * radius });
+                emitters.push(Emitter { block: id, centre, radius, chance: power * radius * radius, upto: 0.0 });
             }
         }
         let total: f64 = emitters.iter().map(|e| e.chance).sum();
         if !(total > 0.0 && total.is_finite()) {
             emitters.clear();
         }
+        let mut upto = 0.0;
         for e in &mut emitters {
             e.chance /= total;
+            upto += e.chance;
+            e.upto = upto;
         }
         PathTracer { shader: Shader::new(world), world, emitters, options, transparent: complex.has_transparent() }
     }
@@ -296,15 +302,10 @@ impl<'w> PathTracer<'w> {
         if !self.options.next_event || self.emitters.is_empty() {
             return l;
         }
-        let mut below = 0.0;
-        let emitter = self
-            .emitters
-            .iter()
-            .find(|em| {
-                below += em.chance;
-                pick < below
-            })
-            .unwrap_or(&self.emitters[self.emitters.len() - 1]);
+        // Binary search of the cumulative distribution (the last emitter
+        // takes what rounding leaves above its `upto`).
+        let k = self.emitters.partition_point(|em| em.upto <= pick).min(self.emitters.len() - 1);
+        let emitter = &self.emitters[k];
         let (w, pdf) = emitter.sample(&e.point, u);
         let light_pdf = emitter.chance * pdf;
         let wi = basis.to_local(&w);
@@ -376,7 +377,7 @@ mod tests {
     /// area formula of a spherical cap seen from distance `d`.
     #[test]
     fn the_cone_density_is_one_over_the_spheres_solid_angle() {
-        let e = Emitter { block: BlockId(0), centre: Point3::new(0.0, 0.0, 10.0), radius: 2.0, chance: 1.0 };
+        let e = Emitter { block: BlockId(0), centre: Point3::new(0.0, 0.0, 10.0), radius: 2.0, chance: 1.0, upto: 1.0 };
         let (pdf, cone) = e.cone(&Point3::origin());
         let (axis, cos_max) = cone.expect("the origin is outside the sphere");
         assert_eq!(axis, Vector3::z());
