@@ -1,5 +1,5 @@
 //! Placed definitions: a complex whose list holds, besides blocks,
-//! instances and lattices of other complexes (docs/model.md §3.9). Each
+//! instances and lattices of other complexes (docs/model.md §3.10). Each
 //! definition is built once in its own frame; a query moves the ray into
 //! that frame and asks the definition, so memory grows with the unique
 //! geometry and the number of placements, not with the expansion.
