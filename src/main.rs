@@ -526,13 +526,12 @@ fn merge(args: MergeArgs) -> Result<(), Error> {
         render::output::check_writable(p)?;
     }
     let start = std::time::Instant::now();
-    let merged = render::tiles::merge(&parts)?;
-    let (width, height, count) = (merged.width, merged.height, merged.parts);
+    let merge = render::tiles::merge(&parts)?;
+    let (width, height, count) = (merge.width, merge.height, merge.parts.len());
     if let Some(p) = &png {
-        let rgb = merged.rgb().ok_or_else(|| Error::Options("--png: the parts have no R, G and B channels".into()))?;
-        render::png::write_png_planes(p, (width, height), &rgb, exposure)?;
+        render::png::write_png_planes(p, (width, height), &merge.rgb()?, exposure)?;
     }
-    merged.write(&output)?;
+    merge.write(&output)?;
     eprintln!("{}: {width}x{height} from {count} parts in {:.2} s", output.display(), start.elapsed().as_secs_f64());
     Ok(())
 }

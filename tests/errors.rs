@@ -858,6 +858,17 @@ fn bad_merges_exit_1_and_name_the_part() {
         ("norender.exr", crafted((0, 3), &["B", "G", "R"], &[("komplex.tile", "0/2")], 1)),
         ("layers.exr", crafted((0, 3), &["B", "G", "R"], &tags, 2)),
         ("depth.exr", crafted((0, 6), &["Z"], &[("komplex.tile", "0/1"), ("komplex.render", "r")], 1)),
+        (
+            "zip16.exr",
+            crate::tiles::crafted_zip(
+                true,
+                (8, 6),
+                (3, 6),
+                &["B", "G", "R"],
+                &[("komplex.tile", "1/2"), ("komplex.render", "r")],
+                1,
+            ),
+        ),
     ];
     let files: Vec<(&str, &[u8])> = files.iter().map(|(n, b)| (*n, b.as_slice())).collect();
     let merge = |parts: &[&str], code: i32, needle: &str| {
@@ -890,6 +901,12 @@ fn bad_merges_exit_1_and_name_the_part() {
     merge(&["index.exr"], 1, r#"index.exr: komplex.tile is "5/4", not I/N with I < N"#);
     merge(&["norender.exr"], 1, "norender.exr: tile 0/2 has no komplex.render attribute");
     merge(&["layers.exr"], 1, "layers.exr: holds 2 parts; a tile holds one");
+    merge(
+        &["a.exr", "zip16.exr"],
+        1,
+        "zip16.exr: a foreign part: its compression is ZIP16, not Uncompressed, unlike a.exr (the first part)",
+    );
+    merge(&["zip16.exr"], 1, "zip16.exr: its compression (ZIP16) stores 16 rows a block, and rows 3..6 are not whole blocks of the image; render --tile writes one row a block");
     merge(&["depth.exr"], 1, "--png: the parts have no R, G and B channels");
     merge(&[p0, "none.exr"], 3, "none.exr: No such file or directory (os error 2)");
     check_with(

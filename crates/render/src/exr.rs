@@ -42,17 +42,19 @@ pub enum ColorType {
 /// written with a data window of those rows and a display window of the
 /// whole image.
 pub fn write_exr(frame: Frame, path: &Path, color: ColorType) -> Result<(), Error> {
-    write_exr_with(frame, path, color, &[], &[])
+    write_frame(frame, path, color, Compression::ZIP16, &[], &[])
 }
 
-/// [`write_exr`] with text attributes in the header: `image` among the
-/// attributes of the whole image, `layer` among those of its one layer
-/// (the `exr` crate keeps each set in a hash map, so one attribute in each
-/// gives a header whose bytes do not vary from run to run).
-pub fn write_exr_with(
+/// [`write_exr`] with another compression and text attributes in the
+/// header: `image` among the attributes of the whole image, `layer` among
+/// those of its one layer (the `exr` crate keeps each set in a hash map,
+/// so one attribute in each gives a header whose bytes do not vary from
+/// run to run).
+pub(crate) fn write_frame(
     frame: Frame,
     path: &Path,
     color: ColorType,
+    compression: Compression,
     image: &[(&str, &str)],
     layer: &[(&str, &str)],
 ) -> Result<(), Error> {
@@ -100,27 +102,28 @@ pub fn write_exr_with(
         list.push(("spp", FlatSamples::U32(spp)));
         list.push(("error", FlatSamples::F32(error)));
     }
-    write_layer(path, window, list, image, layer)
+    write_layer(path, window, compression, list, image, layer)
 }
 
 /// Where a layer's rows sit: rows `first_row .. first_row + rows`, each
 /// `width` pixels, of an image `image_height` rows high.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct Window {
-    pub(crate) width: u32,
-    pub(crate) first_row: u32,
-    pub(crate) rows: u32,
-    pub(crate) image_height: u32,
+struct Window {
+    width: u32,
+    first_row: u32,
+    rows: u32,
+    image_height: u32,
 }
 
 /// Writes `channels` (name, samples: `width * rows` each, rows from the
-/// top) as one part with the render's layout (scanlines, ZIP compression,
-/// the channels sorted by name), its data window the rows of `window` and
-/// its display window the whole image, atomically. The caller checks the
-/// lengths.
-pub(crate) fn write_layer(
+/// top) as one part with the render's layout (scanlines from the top, the
+/// channels sorted by name) and `compression`, its data window the rows of
+/// `window` and its display window the whole image, atomically. The caller
+/// checks the lengths.
+fn write_layer(
     path: &Path,
     window: Window,
+    compression: Compression,
     channels: Vec<(&str, FlatSamples)>,
     image: &[(&str, &str)],
     layer: &[(&str, &str)],
@@ -136,7 +139,8 @@ pub(crate) fn write_layer(
         ..LayerAttributes::default()
     };
     let size = (window.width as usize, window.rows as usize);
-    let layer = Layer::new(size, attributes, ENCODING, AnyChannels::sort(list));
+    let encoding = Encoding { compression, ..ENCODING };
+    let layer = Layer::new(size, attributes, encoding, AnyChannels::sort(list));
     let display = IntegerBounds::new(Vec2(0, 0), Vec2(window.width as usize, window.image_height as usize));
     let image = Image::new(ImageAttributes { other: text(image), ..ImageAttributes::new(display) }, layer);
     write_atomic(path, |w| image.write().to_buffered(w).map_err(|e| e.to_string()))

@@ -12,14 +12,17 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use exr::meta::attribute::{AttributeValue, SampleType};
+use exr::block::chunk::CompressedBlock;
+use exr::block::writer::ChunksWriter;
+use exr::meta::attribute::{AttributeValue, SampleType, Text};
 use exr::meta::header::Header;
-use exr::meta::MetaData;
-use exr::prelude::{AnyChannels, FlatSamples, Image, Layer, ReadChannels, ReadLayers};
+use exr::meta::{compute_chunk_count, BlockDescription, Headers, MetaData};
+use exr::prelude::{AnyChannels, Compression, FlatSamples, Image, Layer, ReadChannels, ReadLayers, Vec2};
 
 use crate::error::Error;
-use crate::exr::{write_exr_with, write_layer, ColorType, Window};
+use crate::exr::{write_frame, ColorType};
 use crate::frame::Frame;
+use crate::output::write_atomic;
 use crate::sampling::{mix, GOLDEN};
 use crate::world::World;
 
@@ -178,17 +181,25 @@ pub fn render_fingerprint(scene_text: &[u8], world: &World, half: bool) -> Finge
 }
 
 /// Writes `frame`, the rows of `tile` ([`Options::rows`](crate::frame::Options)),
-/// to `path` as [`write_exr`](crate::exr::write_exr) does, with the header
+/// to `path` as [`write_exr`](crate::exr::write_exr) does, but with ZIPS
+/// compression (one row a block, so that [`Merge::write`] copies the
+/// compressed blocks as they are, wherever the band starts) and the header
 /// attributes that make it a part: [`RENDER_ATTRIBUTE`] (`render`, a
 /// [`Fingerprint::hex`]) and [`TILE_ATTRIBUTE`].
 pub fn write_part(frame: Frame, path: &Path, color: ColorType, tile: Tile, render: &str) -> Result<(), Error> {
     let tile = tile.to_string();
-    write_exr_with(frame, path, color, &[(RENDER_ATTRIBUTE, render)], &[(TILE_ATTRIBUTE, &tile)])
+    write_frame(frame, path, color, PART_COMPRESSION, &[(RENDER_ATTRIBUTE, render)], &[(TILE_ATTRIBUTE, &tile)])
 }
+
+/// The compression of parts and of the merged image: ZIP, one row a block
+/// (OpenEXR's ZIPS).
+pub const PART_COMPRESSION: Compression = Compression::ZIP1;
 
 /// What a part's header says.
 #[derive(Clone, Debug, PartialEq)]
 struct PartHeader {
+    /// The header as read.
+    header: Header,
     tile: Tile,
     render: String,
     /// The display window's size.
@@ -228,6 +239,7 @@ impl PartHeader {
         let window = header.data_window();
         let display = header.shared_attributes.display_window;
         Ok(PartHeader {
+            header: header.clone(),
             tile,
             render,
             image: (display.size.0, display.size.1),
@@ -247,6 +259,28 @@ impl PartHeader {
             format!(
                 "tile {} of an image {width}x{height} is rows {first}..{end} of the full width, but the data window is {w}x{h} at ({x}, {y})",
                 self.tile
+            )
+        })
+    }
+}
+
+impl PartHeader {
+    /// Why the part's blocks of rows are not whole blocks of the image
+    /// (scanline blocks of `L` rows, the first at a multiple of `L`, the
+    /// last full unless it ends the image), so that they cannot be copied
+    /// into it as they are. `render --tile` writes one row a block.
+    fn block_error(&self) -> Option<String> {
+        let h = &self.header;
+        if h.blocks != BlockDescription::ScanLines || h.deep {
+            return Some("its pixels are stored in tiles or deep samples, not in scanlines as a part's".into());
+        }
+        let lines = h.compression.scan_lines_per_block();
+        let (first, end) = self.tile.rows(self.image.1 as u32);
+        let whole = |row: u32| (row as usize).is_multiple_of(lines);
+        (!whole(first) || !(whole(end) || end as usize == self.image.1)).then(|| {
+            format!(
+                "its compression ({:?}) stores {lines} rows a block, and rows {first}..{end} are not whole blocks of the image; render --tile writes one row a block",
+                h.compression
             )
         })
     }
@@ -311,29 +345,28 @@ pub fn check_complete(path: &Path, tile: Tile, render: &str, (width, height): (u
     read_pixels(path).map(drop).map_err(|e| e.to_string())
 }
 
-/// The whole image joined from its parts, ready to write.
+/// The parts of a whole image, checked and in tile order, ready to be
+/// joined ([`merge`]).
 #[derive(Debug)]
-pub struct Merged {
+pub struct Merge {
     /// Width in pixels.
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// The number of parts joined.
-    pub parts: u32,
-    /// Every channel, by name in the parts' order, `width × height`
-    /// samples from the top-left.
-    pub channels: Vec<(String, FlatSamples)>,
+    /// The parts, in tile order.
+    pub parts: Vec<PathBuf>,
+    /// The first part's header, the model of the whole image's.
+    header: Header,
 }
 
-/// Joins the parts at `paths` (any order) into the whole image: the parts
-/// must be the tiles `0 .. N` of one render, each once. A part that is not
-/// a tile, is of another render (another fingerprint, number of parts,
-/// image size or channel list than the first part's), repeats a tile or
-/// has a data window other than its tile's band is an error that names the
-/// file; a missing tile is an error that names its index (and the file
-/// name it would have beside the first part). Every header is checked
-/// before any pixel is read.
-pub fn merge(paths: &[PathBuf]) -> Result<Merged, Error> {
+/// Checks that the parts at `paths` (any order) are the tiles `0 .. N` of
+/// one render, each once, reading their headers alone. A part that is not a
+/// tile, is of another render (another fingerprint, number of parts, image
+/// size, channel list or compression than the first part's), repeats a
+/// tile or has a data window other than its tile's band is an error that
+/// names the file; a missing tile is an error that names its index (and the
+/// file name it would have beside the first part).
+pub fn merge(paths: &[PathBuf]) -> Result<Merge, Error> {
     let Some(first_path) = paths.first() else {
         return Err(Error::Options("merge needs at least one part".into()));
     };
@@ -373,10 +406,20 @@ pub fn merge(paths: &[PathBuf]) -> Result<Merged, Error> {
                     names(&f.channels)
                 )));
             }
+            let layout = |h: &Header| (h.compression, h.blocks);
+            if layout(&header.header) != layout(&f.header) {
+                return Err(foreign(format!(
+                    "its compression is {:?}, not {:?}",
+                    header.header.compression, f.header.compression
+                )));
+            }
         } else {
             first = Some(header.clone());
         }
         if let Some(e) = header.window_error() {
+            return Err(data(path, e));
+        }
+        if let Some(e) = header.block_error() {
             return Err(data(path, e));
         }
         if let Some((other, _)) = by_index.get(&header.tile.index) {
@@ -401,64 +444,8 @@ pub fn merge(paths: &[PathBuf]) -> Result<Merged, Error> {
         return Err(Error::Options(format!("{which}: none of the {given} parts given holds it{expected}")));
     }
     let (width, height) = first.image;
-    let mut channels: Vec<(String, FlatSamples)> = Vec::new();
-    for (path, _) in by_index.values() {
-        let part = read_pixels(path)?.layer_data.channel_data.list;
-        if channels.is_empty() {
-            // The first part's samples, with room for the others'.
-            let n = width * height;
-            channels = part.into_iter().map(|c| (c.name.to_string(), with_capacity(c.sample_data, n))).collect();
-            continue;
-        }
-        let kinds = |list: &mut dyn Iterator<Item = (String, SampleType)>| list.collect::<Vec<_>>();
-        let have = kinds(&mut channels.iter().map(|(n, s)| (n.clone(), sample_type(s))));
-        let read = kinds(&mut part.iter().map(|c| (c.name.to_string(), sample_type(&c.sample_data))));
-        if read != have {
-            let names =
-                |c: &[(String, SampleType)]| c.iter().map(|(n, t)| format!("{n} {t:?}")).collect::<Vec<_>>().join(", ");
-            return Err(data(
-                path,
-                format!(
-                    "a foreign part: its channels are [{}], not [{}], unlike {} (the first part)",
-                    names(&read),
-                    names(&have),
-                    first_path.display()
-                ),
-            ));
-        }
-        for ((_, out), channel) in channels.iter_mut().zip(part) {
-            match (out, channel.sample_data) {
-                (FlatSamples::F16(o), FlatSamples::F16(s)) => o.extend_from_slice(&s),
-                (FlatSamples::F32(o), FlatSamples::F32(s)) => o.extend_from_slice(&s),
-                (FlatSamples::U32(o), FlatSamples::U32(s)) => o.extend_from_slice(&s),
-                // The types were compared just above.
-                _ => {}
-            }
-        }
-    }
-    Ok(Merged { width: width as u32, height: height as u32, parts: count, channels })
-}
-
-/// The sample type of `samples`.
-fn sample_type(samples: &FlatSamples) -> SampleType {
-    match samples {
-        FlatSamples::F16(_) => SampleType::F16,
-        FlatSamples::F32(_) => SampleType::F32,
-        FlatSamples::U32(_) => SampleType::U32,
-    }
-}
-
-/// `samples` with room for `n` in all.
-fn with_capacity(samples: FlatSamples, n: usize) -> FlatSamples {
-    fn grown<T>(mut v: Vec<T>, n: usize) -> Vec<T> {
-        v.reserve(n.saturating_sub(v.len()));
-        v
-    }
-    match samples {
-        FlatSamples::F16(v) => FlatSamples::F16(grown(v, n)),
-        FlatSamples::F32(v) => FlatSamples::F32(grown(v, n)),
-        FlatSamples::U32(v) => FlatSamples::U32(grown(v, n)),
-    }
+    let parts = by_index.values().map(|(p, _)| p.to_path_buf()).collect();
+    Ok(Merge { width: width as u32, height: height as u32, parts, header: first.header })
 }
 
 /// The file name tile `want` would have beside `path`, a part named as
@@ -471,25 +458,86 @@ fn expected_name(path: &Path, want: Tile, have: Tile) -> Option<PathBuf> {
     Some(path.with_file_name(renamed))
 }
 
-impl Merged {
-    /// The red, green and blue channels as f32, if the image has them.
-    pub fn rgb(&self) -> Option<[Vec<f32>; 3]> {
-        let plane = |name: &str| {
-            self.channels.iter().find(|(n, _)| n == name).and_then(|(_, s)| match s {
-                FlatSamples::F32(v) => Some(v.clone()),
-                FlatSamples::F16(v) => Some(v.iter().map(|x| x.to_f32()).collect()),
-                FlatSamples::U32(_) => None,
+impl Merge {
+    /// Writes the whole image to `path`, atomically: the first part's
+    /// header with the whole image as its data window and no tile
+    /// attributes, then every part's blocks of rows as they are, not
+    /// decompressed (the parts' blocks are whole blocks of the image:
+    /// [`PartHeader::block_error`]). A part that cannot be read to its end
+    /// (truncated) is an error that names it, and nothing is written.
+    pub fn write(&self, path: &Path) -> Result<(), Error> {
+        let mut header = self.header.clone();
+        header.own_attributes.layer_position = Vec2(0, 0);
+        header.layer_size = Vec2(self.width as usize, self.height as usize);
+        header.chunk_count = compute_chunk_count(header.compression, header.layer_size, header.blocks);
+        let ours = |name: &Text| name.to_string().starts_with("komplex.");
+        header.own_attributes.other.retain(|name, _| !ours(name));
+        header.shared_attributes.other.retain(|name, _| !ours(name));
+        let lines = header.compression.scan_lines_per_block();
+        // An error reading a part, kept to name the part (the writer's own
+        // errors name the output).
+        let mut failed: Option<Error> = None;
+        let (count, height) = (self.parts.len() as u32, self.height);
+        let written = write_atomic(path, |w| {
+            let headers: Headers = std::iter::once(header).collect();
+            exr::block::write(w, headers, true, |_, writer| {
+                for (index, part) in (0..count).zip(&self.parts) {
+                    let rows = Tile { index, count }.rows(height);
+                    if let Err(e) = copy_blocks(part, rows, lines, writer) {
+                        let message = e.to_string();
+                        failed = Some(e);
+                        return Err(exr::error::Error::Invalid(message.into()));
+                    }
+                }
+                Ok(())
             })
-        };
-        Some([plane("R")?, plane("G")?, plane("B")?])
+            .map_err(|e| e.to_string())
+        });
+        match failed {
+            Some(e) => Err(e),
+            None => written,
+        }
     }
 
-    /// Writes the image to `path` as the one-process render writes it
-    /// (the same layout, no tile attributes), atomically.
-    pub fn write(self, path: &Path) -> Result<(), Error> {
-        let window = Window { width: self.width, first_row: 0, rows: self.height, image_height: self.height };
-        let channels = self.channels.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>();
-        let list = channels.iter().map(String::as_str).zip(self.channels.into_iter().map(|(_, s)| s)).collect();
-        write_layer(path, window, list, &[], &[])
+    /// The red, green and blue channels of the whole image as `f32`
+    /// (decompressed from every part), for the preview.
+    pub fn rgb(&self) -> Result<[Vec<f32>; 3], Error> {
+        let n = self.width as usize * self.height as usize;
+        let mut rgb: [Vec<f32>; 3] = std::array::from_fn(|_| Vec::with_capacity(n));
+        for part in &self.parts {
+            let channels = read_pixels(part)?.layer_data.channel_data.list;
+            for (plane, name) in rgb.iter_mut().zip(["R", "G", "B"]) {
+                match channels.iter().find(|c| c.name == *name).map(|c| &c.sample_data) {
+                    Some(FlatSamples::F32(v)) => plane.extend_from_slice(v),
+                    Some(FlatSamples::F16(v)) => plane.extend(v.iter().map(|x| x.to_f32())),
+                    // Absent, or integers.
+                    _ => return Err(Error::Options("--png: the parts have no R, G and B channels".into())),
+                }
+            }
+        }
+        Ok(rgb)
     }
+}
+
+/// Writes every block of rows of the part at `path`, whose rows are
+/// `rows`, to `writer`, at its place in the whole image (`lines` rows a
+/// block).
+fn copy_blocks(path: &Path, rows: (u32, u32), lines: usize, writer: &mut impl ChunksWriter) -> Result<(), Error> {
+    let unreadable = |what: String| data(path, format!("not a readable OpenEXR file: {what}"));
+    let file = std::fs::File::open(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let chunks = exr::block::read(std::io::BufReader::new(file), false)
+        .and_then(|r| r.all_chunks(false))
+        .map_err(|e| read_error(path, e))?;
+    for chunk in chunks {
+        let chunk = chunk.map_err(|e| read_error(path, e))?;
+        let CompressedBlock::ScanLine(block) = &chunk.compressed_block else {
+            return Err(unreadable("a block that is not of scanlines".into()));
+        };
+        let y = block.y_coordinate;
+        if !(i64::from(rows.0)..i64::from(rows.1)).contains(&i64::from(y)) {
+            return Err(unreadable(format!("a block at row {y}, outside rows {}..{}", rows.0, rows.1)));
+        }
+        writer.write_chunk(y as usize / lines, chunk).map_err(|e| unreadable(e.to_string()))?;
+    }
+    Ok(())
 }
