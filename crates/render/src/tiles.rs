@@ -541,3 +541,105 @@ fn copy_blocks(path: &Path, rows: (u32, u32), lines: usize, writer: &mut impl Ch
     }
     Ok(())
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    /// The bands of `N` parts cover rows `0 .. H` in order, each non-empty,
+    /// for every `N ≤ H` up to 64 rows.
+    #[test]
+    fn the_bands_tile_the_image_in_order_and_none_is_empty() {
+        for height in 1..=64u32 {
+            for count in 1..=height {
+                let mut next = 0;
+                for index in 0..count {
+                    let (first, end) = Tile { index, count }.rows(height);
+                    assert_eq!(first, next, "{index}/{count} of {height}");
+                    assert!(end > first, "{index}/{count} of {height} is empty");
+                    next = end;
+                }
+                assert_eq!(next, height);
+                assert!(Tile { index: 0, count }.check_height(height).is_ok());
+            }
+            assert!(Tile { index: 0, count: height + 1 }.check_height(height).is_err());
+        }
+    }
+
+    fn parse(text: &str, env: &[(&str, &str)]) -> Result<Tile, String> {
+        Tile::parse(text, |name| env.iter().find(|(n, _)| *n == name).map(|(_, v)| v.to_string()))
+            .map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn tile_specs_parse_as_documented() {
+        let tile = |index, count| Ok(Tile { index, count });
+        assert_eq!(parse("2/4", &[]), tile(2, 4));
+        assert_eq!(parse("0/1", &[]), tile(0, 1));
+        assert_eq!(parse("auto/4", &[("SLURM_ARRAY_TASK_ID", "3")]), tile(3, 4));
+        assert_eq!(parse("auto/4", &[("JOB_COMPLETION_INDEX", "1")]), tile(1, 4));
+        // Slurm's first; an empty variable counts as unset.
+        assert_eq!(parse("auto/4", &[("SLURM_ARRAY_TASK_ID", "0"), ("JOB_COMPLETION_INDEX", "2")]), tile(0, 4));
+        assert_eq!(parse("auto/4", &[("SLURM_ARRAY_TASK_ID", ""), ("JOB_COMPLETION_INDEX", "2")]), tile(2, 4));
+        for bad in ["", "2", "2/", "/4", "-1/4", "+1/4", " 1/4", "1/4/2", "a/4", "1/x", "1.0/4", "99999999999/4"] {
+            assert!(parse(bad, &[]).unwrap_err().contains("expected I/N"), "{bad:?}");
+        }
+        assert!(parse("4/4", &[]).unwrap_err().contains("must be below 4"));
+        assert!(parse("0/0", &[]).unwrap_err().contains("at least 1"));
+        assert!(parse("auto/4", &[]).unwrap_err().contains("neither SLURM_ARRAY_TASK_ID nor JOB_COMPLETION_INDEX"));
+        for v in ["4", "-1", "x", "1.5"] {
+            assert!(parse("auto/4", &[("JOB_COMPLETION_INDEX", v)]).unwrap_err().contains("not a part index"), "{v}");
+        }
+    }
+
+    /// The fingerprint changes with every labelled part, and with where a
+    /// byte string ends (its length is absorbed too).
+    #[test]
+    fn fingerprints_tell_inputs_apart() {
+        let f = |parts: &[(&str, &[u8])]| parts.iter().fold(Fingerprint::new("t"), |f, (l, d)| f.bytes(l, d)).hex();
+        let base = f(&[("a", b"12345678x"), ("b", b"")]);
+        assert_eq!(base.len(), 16);
+        assert_eq!(base, f(&[("a", b"12345678x"), ("b", b"")]));
+        for other in [
+            f(&[("a", b"12345678y"), ("b", b"")]),
+            f(&[("a", b"12345678x\0"), ("b", b"")]),
+            f(&[("a", b"12345678"), ("b", b"x")]),
+            f(&[("c", b"12345678x"), ("b", b"")]),
+            f(&[("a", b"12345678x")]),
+        ] {
+            assert_ne!(base, other);
+        }
+    }
+
+    /// A band of rows holds exactly the whole frame's rows, for the Whitted
+    /// grid and for the path integrator's random samples, from odd rows too.
+    #[test]
+    fn a_band_renders_the_whole_frames_rows() {
+        for settings in [r#"{ "samples": 2 }"#, r#"{ "integrator": "path", "spp": 3 }"#] {
+            let json = format!(
+                r#"{{ "camera": {{ "eye": [0, 0, 5], "direction": [0, 0, -1], "width": 9, "height": 23 }},
+                    "settings": {settings}, "lights": [ {{ "position": [2, 2, 5] }} ],
+                    "materials": {{ "lamp": {{ "emission": [1, 1, 1] }} }},
+                    "blocks": [ {{ "objects": [ {{ "sphere": {{}} }} ] }},
+                                {{ "material": "lamp", "objects": [ {{ "sphere": {{ "radius": 0.5 }}, "transform": [ {{ "translate": [1, 1, 1] }} ] }} ] }} ] }}"#
+            );
+            let world = crate::format::SceneFile::from_json(&json).unwrap().to_world().unwrap();
+            let render =
+                |rows| crate::frame::render(&world, crate::frame::Options { rows, ..Default::default() }, &|| {});
+            let (whole, _) = render(None).unwrap();
+            for (first, end) in [(0, 23), (3, 4), (5, 18), (17, 23)] {
+                let (band, _) = render(Some((first, end))).unwrap();
+                assert_eq!((band.first_row, band.height, band.image_height), (first, end - first, 23));
+                for i in first..end {
+                    for j in 0..9 {
+                        assert_eq!(band.at(i - first, j), whole.at(i, j), "{settings} row {i} column {j}");
+                    }
+                }
+            }
+            for bad in [(3, 3), (5, 2), (0, 24)] {
+                assert!(render(Some(bad)).is_err(), "{bad:?}");
+            }
+        }
+    }
+}
