@@ -339,7 +339,7 @@ pub fn check_complete(path: &Path, tile: Tile, render: &str, (width, height): (u
     if header.image != (width as usize, height as usize) {
         return Err(format!("its image is {}x{}, not {width}x{height}", header.image.0, header.image.1));
     }
-    if let Some(e) = header.window_error() {
+    if let Some(e) = header.window_error().or_else(|| header.block_error()) {
         return Err(e);
     }
     read_pixels(path).map(drop).map_err(|e| e.to_string())
