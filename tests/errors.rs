@@ -833,6 +833,10 @@ fn bad_merges_exit_1_and_name_the_part() {
         crate::tiles::crafted_part((8, 6), rows, names, tags, layers)
     };
     let tags = [("komplex.tile", "0/2"), ("komplex.render", "r")];
+    use exr::prelude::Encoding;
+    let encoded = |encoding, rows, tags: &[(&str, &str)]| {
+        crate::tiles::crafted_encoded(encoding, (8, 6), rows, &["B", "G", "R"], tags, 1)
+    };
     let files: Vec<(&str, Vec<u8>)> = vec![
         ("p.tile-0-of-3.exr", read("p.tile-0-of-3.exr")),
         ("p.tile-1-of-3.exr", p1.clone()),
@@ -858,17 +862,8 @@ fn bad_merges_exit_1_and_name_the_part() {
         ("norender.exr", crafted((0, 3), &["B", "G", "R"], &[("komplex.tile", "0/2")], 1)),
         ("layers.exr", crafted((0, 3), &["B", "G", "R"], &tags, 2)),
         ("depth.exr", crafted((0, 6), &["Z"], &[("komplex.tile", "0/1"), ("komplex.render", "r")], 1)),
-        (
-            "zip16.exr",
-            crate::tiles::crafted_zip(
-                true,
-                (8, 6),
-                (3, 6),
-                &["B", "G", "R"],
-                &[("komplex.tile", "1/2"), ("komplex.render", "r")],
-                1,
-            ),
-        ),
+        ("zip16.exr", encoded(Encoding::SMALL_LOSSLESS, (3, 6), &[("komplex.tile", "1/2"), ("komplex.render", "r")])),
+        ("tiled.exr", encoded(Encoding::FAST_LOSSLESS, (0, 3), &tags)),
     ];
     let files: Vec<(&str, &[u8])> = files.iter().map(|(n, b)| (*n, b.as_slice())).collect();
     let merge = |parts: &[&str], code: i32, needle: &str| {
@@ -906,6 +901,7 @@ fn bad_merges_exit_1_and_name_the_part() {
         1,
         "zip16.exr: a foreign part: its compression is ZIP16, not Uncompressed, unlike a.exr (the first part)",
     );
+    merge(&["tiled.exr"], 1, "tiled.exr: its pixels are stored in tiles or deep samples, not in scanlines as a part's");
     merge(&["zip16.exr"], 1, "zip16.exr: its compression (ZIP16) stores 16 rows a block, and rows 3..6 are not whole blocks of the image; render --tile writes one row a block");
     merge(&["depth.exr"], 1, "--png: the parts have no R, G and B channels");
     merge(&[p0, "none.exr"], 3, "none.exr: No such file or directory (os error 2)");

@@ -248,12 +248,12 @@ pub(crate) fn crafted_part(
     attributes: &[(&str, &str)],
     layers: usize,
 ) -> Vec<u8> {
-    crafted_zip(false, size, rows, names, attributes, layers)
+    crafted_encoded(exr::prelude::Encoding::UNCOMPRESSED, size, rows, names, attributes, layers)
 }
 
-/// [`crafted_part`], with ZIP compression in blocks of 16 rows if `zip16`.
-pub(crate) fn crafted_zip(
-    zip16: bool,
+/// [`crafted_part`] in another `encoding` (compression and blocks).
+pub(crate) fn crafted_encoded(
+    encoding: exr::prelude::Encoding,
     size: (usize, usize),
     rows: (usize, usize),
     names: &[&str],
@@ -261,7 +261,6 @@ pub(crate) fn crafted_zip(
     layers: usize,
 ) -> Vec<u8> {
     use exr::prelude::*;
-    let encoding = if zip16 { Encoding::SMALL_LOSSLESS } else { Encoding::UNCOMPRESSED };
     let n = size.0 * (rows.1 - rows.0);
     let layer = |k: usize| {
         let channels: SmallVec<[AnyChannel<FlatSamples>; 4]> =

@@ -262,9 +262,7 @@ impl PartHeader {
             )
         })
     }
-}
 
-impl PartHeader {
     /// Why the part's blocks of rows are not whole blocks of the image
     /// (scanline blocks of `L` rows, the first at a multiple of `L`, the
     /// last full unless it ends the image), so that they cannot be copied
