@@ -279,3 +279,15 @@ pub(crate) fn crafted_encoded(
     image.write().to_buffered(&mut bytes).unwrap();
     bytes.into_inner()
 }
+
+/// Without `-o`, the part goes to the scene's stem in the current
+/// directory, with the tile before the extension.
+#[test]
+fn the_default_output_gets_the_tile_before_its_extension() {
+    let dir = tempdir();
+    let table = scene("table.json");
+    komplex_ok(dir.path(), &["render", table.to_str().unwrap(), "--width", "8", "--height", "6", "--tile", "1/2"]);
+    let names: Vec<String> =
+        std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    assert_eq!(names, ["table.tile-1-of-2.exr"]);
+}
