@@ -4,7 +4,7 @@ everything the end-to-end tests check as JSON on stdout: the parts, the
 header's compression and storage, the data and display windows (inclusive
 corners [x0, y0, x1, y1]), the text attributes named `komplex.*`, each
 channel's sample type and every sample (non-finite floats as the strings
-"inf", "-inf", "nan").
+"inf", "-inf", "nan"); for several files, a list of those objects.
 
 Exit status 2 if the OpenEXR or numpy package is missing."""
 import json
@@ -25,7 +25,7 @@ def sample(x):
     return x
 
 
-def main(path):
+def read(path):
     with OpenEXR.File(path, separate_channels=True) as f:
         header = f.header()
         lo, hi = header["dataWindow"]
@@ -46,8 +46,10 @@ def main(path):
             kind = {np.dtype("float32"): "f32", np.dtype("float16"): "f16", np.dtype("uint32"): "u32"}[px.dtype]
             values = px.astype(np.float64).ravel().tolist() if kind != "u32" else px.ravel().tolist()
             out["channels"][name] = {"type": kind, "samples": [sample(v) for v in values]}
-    json.dump(out, sys.stdout)
+    return out
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    # One file: its object; several: a list of them, in order.
+    files = [read(path) for path in sys.argv[1:]]
+    json.dump(files[0] if len(files) == 1 else files, sys.stdout)

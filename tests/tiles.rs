@@ -7,7 +7,7 @@
 use std::os::unix::fs::MetadataExt;
 use std::path::{Path, PathBuf};
 
-use crate::support::{komplex, komplex_env, komplex_ok, python, read_exr, scene, tempdir, text};
+use crate::support::{komplex, komplex_env, komplex_ok, python, scene, tempdir, text};
 
 /// Renders `scene` with `args` in one process to `one.exr`, and as `n`
 /// tiles (`img.tile-I-of-n.exr`), returning the one-process file and the
@@ -39,70 +39,93 @@ fn merge(dir: &Path, parts: &[PathBuf]) -> PathBuf {
     dir.join("merged.exr")
 }
 
-/// The part's header and samples as the independent reader (Python's
-/// OpenEXR) sees them; `None` where it is not installed (not under CI).
-fn read_raw(path: &Path) -> Option<serde_json::Value> {
-    let out = python("read_exr.py", &[path])?;
-    Some(serde_json::from_slice(&out.stdout).unwrap())
+/// The files' headers and samples as the independent reader (Python's
+/// OpenEXR) sees them, in one run of it; `None` where it is not installed
+/// (not under CI).
+fn read_raw(paths: &[&Path]) -> Option<Vec<serde_json::Value>> {
+    let out = python("read_exr.py", paths)?;
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    Some(if paths.len() == 1 { vec![v] } else { v.as_array().unwrap().clone() })
+}
+
+/// Every channel of an EXR file decoded by the `exr` crate: its name and
+/// samples (as bits, type by type).
+fn decoded(path: &Path) -> Vec<(String, Vec<u64>)> {
+    use exr::prelude::*;
+    let image = read().no_deep_data().largest_resolution_level().all_channels().first_valid_layer().all_attributes();
+    let image = image.from_file(path).unwrap();
+    let bits = |s: &FlatSamples| match s {
+        FlatSamples::F16(v) => v.iter().map(|x| u64::from(x.to_bits()) | 1 << 40).collect(),
+        FlatSamples::F32(v) => v.iter().map(|x| u64::from(x.to_bits()) | 2 << 40).collect(),
+        FlatSamples::U32(v) => v.iter().map(|&x| u64::from(x) | 3 << 40).collect(),
+    };
+    image.layer_data.channel_data.list.iter().map(|c| (c.name.to_string(), bits(&c.sample_data))).collect()
+}
+
+/// A channel's samples as the reader printed them, in f32 (serde_json's
+/// float parsing is not always correctly rounded in f64; every sample is
+/// an f32 or narrower).
+fn samples(channel: &serde_json::Value) -> Vec<f32> {
+    let number = |v: &serde_json::Value| match v.as_str() {
+        Some("inf") => f32::INFINITY,
+        Some(other) => panic!("sample {other}"),
+        None => v.as_f64().unwrap() as f32,
+    };
+    channel["samples"].as_array().unwrap().iter().map(number).collect()
 }
 
 /// Renders whole and in `n` tiles, checks every part against the rows of
 /// the whole image and the merge against the whole image, channel for
-/// channel, both read by the independent reader; returns the channel names.
+/// channel, all read by the independent reader; returns the channel names.
 fn check_merge(scene: &Path, args: &[&str], n: u32) -> Vec<String> {
     let dir = tempdir();
     let d = dir.path();
     let (one, parts) = render_both(d, scene, args, n);
     let merged = merge(d, &parts);
-    let Some(whole) = read_exr(&one) else { return Vec::new() };
-    let joined = read_exr(&merged).unwrap();
-    assert_eq!((joined.width, joined.height), (whole.width, whole.height));
-    // The parts' compression, one row a block.
-    assert_eq!((joined.compression.as_str(), joined.parts), ("ZIPS_COMPRESSION", 1));
-    let raw = read_raw(&merged).unwrap();
-    assert_eq!(raw["data_window"], raw["display_window"]);
-    assert_eq!(raw["attributes"], serde_json::json!({}), "the merge keeps no tile attribute");
-    assert_eq!(joined.channels.keys().collect::<Vec<_>>(), whole.channels.keys().collect::<Vec<_>>());
-    for (name, c) in &whole.channels {
-        assert_eq!(joined.channels[name].kind, c.kind, "channel {name}");
-        // Bit for bit, NaN-free (compare as bits so that a NaN would count).
-        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert!(bits(&joined.channels[name].samples) == bits(&c.samples), "channel {name} differs");
+    // Decoded by the `exr` crate too, so that the comparison runs where
+    // Python's OpenEXR is missing.
+    assert!(decoded(&merged) == decoded(&one), "the merge's channels differ from one.exr's");
+    let files: Vec<&Path> =
+        [one.as_path(), merged.as_path()].into_iter().chain(parts.iter().map(PathBuf::as_path)).collect();
+    let Some(raw) = read_raw(&files) else { return Vec::new() };
+    let (whole, joined, parts_raw) = (&raw[0], &raw[1], &raw[2..]);
+    // The merge: the whole image's windows and channels, no tile attribute,
+    // the parts' compression (one row a block).
+    for key in ["display_window", "data_window", "parts"] {
+        assert_eq!(joined[key], whole[key], "{key}");
     }
-    let (w, h) = (whole.width, whole.height);
+    assert_eq!(joined["data_window"], joined["display_window"]);
+    assert_eq!(joined["compression"], "ZIPS_COMPRESSION");
+    assert_eq!(joined["attributes"], serde_json::json!({}), "the merge keeps no tile attribute");
+    let channels = whole["channels"].as_object().unwrap();
+    let names: Vec<&String> = channels.keys().collect();
+    assert_eq!(joined["channels"].as_object().unwrap().keys().collect::<Vec<_>>(), names);
+    for (name, c) in channels {
+        assert_eq!(joined["channels"][name]["type"], c["type"], "channel {name}");
+        assert!(samples(&joined["channels"][name]) == samples(c), "channel {name} differs");
+    }
+    // The parts: bands of the whole image's rows, the whole image as their
+    // display window, one fingerprint.
+    let [_, _, w1, h1] = [0, 1, 2, 3].map(|k| whole["display_window"][k].as_u64().unwrap() as usize);
+    let (w, h) = (w1 + 1, h1 + 1);
     let mut next_row = 0;
-    for (i, part) in parts.iter().enumerate() {
-        let raw = read_raw(part).unwrap();
-        let first = i * h / n as usize;
-        let end = (i + 1) * h / n as usize;
+    for (i, (raw, part)) in parts_raw.iter().zip(&parts).enumerate() {
+        let (first, end) = (i * h / n as usize, (i + 1) * h / n as usize);
         assert_eq!(first, next_row, "the bands tile the image");
         next_row = end;
-        assert_eq!(raw["display_window"], serde_json::json!([0, 0, w - 1, h - 1]), "{}", part.display());
+        assert_eq!(raw["display_window"], whole["display_window"], "{}", part.display());
         assert_eq!(raw["data_window"], serde_json::json!([0, first, w - 1, end - 1]), "{}", part.display());
         assert_eq!(raw["attributes"]["komplex.tile"], format!("{i}/{n}"));
-        assert_eq!(raw["attributes"]["komplex.render"], read_raw(&parts[0]).unwrap()["attributes"]["komplex.render"]);
-        for (name, c) in &whole.channels {
-            let got = &raw["channels"][name];
-            assert_eq!(got["type"], c.kind.as_str(), "{name}");
-            let want = &c.samples[first * w..end * w];
-            let got: Vec<f64> = got["samples"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|v| if v == "inf" { f64::INFINITY } else { v.as_f64().unwrap() })
-                .collect();
-            // serde_json's float parsing is not always correctly rounded in
-            // f64; every sample is an f32 or smaller, so compare in f32.
-            let f = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<_>>();
-            assert!(
-                f(&got) == f(want),
-                "{} channel {name}: not rows {first}..{end} of the whole image",
-                part.display()
-            );
+        assert_eq!(raw["attributes"]["komplex.render"], parts_raw[0]["attributes"]["komplex.render"]);
+        for (name, c) in channels {
+            assert_eq!(raw["channels"][name]["type"], c["type"], "{name}");
+            let want = &samples(c)[first * w..end * w];
+            let got = samples(&raw["channels"][name]);
+            assert!(got == want, "{} channel {name}: not rows {first}..{end} of the whole image", part.display());
         }
     }
     assert_eq!(next_row, h);
-    whole.channels.keys().cloned().collect()
+    names.into_iter().cloned().collect()
 }
 
 /// 37 rows in four parts: rows 0, 9, 18 and 27 on, two of them odd, so
