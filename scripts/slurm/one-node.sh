@@ -137,7 +137,8 @@ up() {
         write_conf
     fi
     if ! live_pid "$ctld_pid" >/dev/null; then
-        slurmctld || die "slurmctld did not start (see $logs/slurmctld.log)"
+        # -c: start with an empty queue (a test cluster keeps no jobs across down and up).
+        slurmctld -c || die "slurmctld did not start (see $logs/slurmctld.log)"
     fi
     if ! live_pid "$slurmd_pid" >/dev/null; then
         slurmd || die "slurmd did not start (see $logs/slurmd.log)"
