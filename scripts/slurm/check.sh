@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# The Slurm check of .ci/run (docs/cluster.md): brings up a one-node Slurm
+# The cluster check of .ci/run (docs/cluster.md). First the Kubernetes
+# manifests: scripts/k8s/check.py checks that they agree and runs their
+# commands here. Then Slurm: brings up a one-node Slurm
 # cluster (one-node.sh), submits a four-tile render array and its merge
 # with submit.sh, and compares the merged image with the one-process render
 # of the same scene, channel for channel and bit for bit (compare_exr.py,
@@ -77,16 +79,21 @@ submit_and_wait() {
     jobs=()
 }
 
-echo "slurm check: bringing up the one-node cluster"
-"$slurm/one-node.sh" up
-
 rm -rf "$dir"
 mkdir -p "$dir"
+
+echo "cluster check: the Kubernetes manifests agree with each other and their commands, run here, give the one-process image"
+python3 -c 'import yaml' 2>/dev/null \
+    || python3 -m pip install --quiet --disable-pip-version-check PyYAML==6.0.3
+python3 scripts/k8s/check.py "$KOMPLEX" "$scene" "$dir/k8s"
+
+echo "cluster check: bringing up the one-node Slurm cluster"
+"$slurm/one-node.sh" up
 submit_and_wait
 "$KOMPLEX" render "$scene" "${size[@]}" -o "$dir/whole.exr" 2>/dev/null
 python3 "$slurm/compare_exr.py" "$dir/img.exr" "$dir/whole.exr" || fail "the merged image differs from the one-process render"
 
-echo "slurm check: resubmitting with tile 2 and the merged image deleted (--resume renders only tile 2)"
+echo "cluster check: resubmitting with tile 2 and the merged image deleted (--resume renders only tile 2)"
 tile() { echo "$dir/img.tile-$1-of-4.exr"; }
 before=$(stat -c '%n %i %Y' "$(tile 0)" "$(tile 1)" "$(tile 3)")
 rm "$(tile 2)" "$dir/img.exr"
@@ -95,4 +102,4 @@ after=$(stat -c '%n %i %Y' "$(tile 0)" "$(tile 1)" "$(tile 3)")
 [ "$before" = "$after" ] || fail "--resume rewrote tiles that were complete:"$'\n'"$before"$'\n'"$after"
 python3 "$slurm/compare_exr.py" "$dir/img.exr" "$dir/whole.exr" || fail "the merged image differs from the one-process render"
 
-echo "slurm check passed in $((SECONDS - start)) s"
+echo "cluster check passed in $((SECONDS - start)) s"
