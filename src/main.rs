@@ -31,6 +31,8 @@ struct Cli {
 enum Command {
     /// Render a scene to OpenEXR (and optionally a PNG preview).
     Render(RenderArgs),
+    /// Join the parts of a render made with --tile into the whole image.
+    Merge(MergeArgs),
     /// Trace one ray and print every block's intervals, the partition and the first hit
     /// (or, with --rays, every ray of a file and its partition).
     Trace(TraceArgs),
@@ -87,6 +89,29 @@ struct RenderArgs {
     /// Write the colour channels as 16-bit half floats.
     #[arg(long)]
     half: bool,
+    /// Exposure of the PNG preview in stops (pixel values are scaled by 2^E).
+    #[arg(long, value_name = "E", default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Render only part I (0-based) of N, a band of rows, to OUT.tile-I-of-N.exr;
+    /// auto/N takes I from SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX.
+    #[arg(long, value_name = "I/N")]
+    tile: Option<String>,
+    /// Skip the part if its file already holds this very tile of this very render.
+    #[arg(long, requires = "tile")]
+    resume: bool,
+}
+
+#[derive(clap::Args)]
+struct MergeArgs {
+    /// The parts (the files of render --tile), in any order.
+    #[arg(required = true, value_name = "PARTS")]
+    parts: Vec<PathBuf>,
+    /// Output EXR file.
+    #[arg(short, long, value_name = "OUT.exr", required = true)]
+    output: PathBuf,
+    /// Also write an sRGB PNG preview.
+    #[arg(long, value_name = "OUT.png")]
+    png: Option<PathBuf>,
     /// Exposure of the PNG preview in stops (pixel values are scaled by 2^E).
     #[arg(long, value_name = "E", default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
@@ -348,6 +373,7 @@ fn triple(v: &[f64]) -> [f64; 3] {
 fn run(command: Command) -> Result<(), Error> {
     match command {
         Command::Render(args) => render(args),
+        Command::Merge(args) => merge(args),
         Command::Trace(args) => trace(args),
         Command::Slice(args) => slice(args),
         Command::Check { scene } => check(&scene),
@@ -375,11 +401,17 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         seed,
         half,
         exposure,
+        tile,
+        resume,
     } = args;
     render::frame::set_global_threads(threads)?;
     let cancel = interrupt_flag();
     if !exposure.is_finite() {
         return Err(Error::Options(format!("--exposure must be a finite number of stops, got {exposure}")));
+    }
+    let tile = tile.map(|t| render::tiles::Tile::parse(&t, |v| std::env::var(v).ok())).transpose()?;
+    if tile.is_some() && png.is_some() {
+        return Err(Error::Options("--png goes with a whole image, not --tile: give it to komplex merge".into()));
     }
     let mut world = render::load(&scene)?;
     if let Some(n) = samples {
@@ -406,14 +438,35 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     size.apply(&mut world)?;
     world.complex.set_precision(precision.into());
     let output = output.unwrap_or_else(|| default_output(&scene));
+    let output = render::output::part_path(&output, None, tile.map(|t| (t.index, t.count)));
+    let (width, height) = (world.camera.width(), world.camera.height());
+    let fingerprint = match tile {
+        Some(t) => {
+            t.check_height(height)?;
+            let text = std::fs::read(&scene).map_err(|source| Error::Io { path: scene.clone(), source })?;
+            let fingerprint = render::tiles::render_fingerprint(&text, &world, half).hex();
+            if resume && output.exists() {
+                match render::tiles::check_complete(&output, t, &fingerprint, (width, height)) {
+                    Ok(()) => {
+                        eprintln!("{}: tile {t} is already complete; skipped (--resume)", output.display());
+                        return Ok(());
+                    }
+                    Err(why) => eprintln!("{}: rendering tile {t} again (--resume): {why}", output.display()),
+                }
+            }
+            fingerprint
+        }
+        None => String::new(),
+    };
+    let rows = tile.map(|t| t.rows(height));
     // Fail before the render, not after it, if an output cannot be written.
     render::output::check_writable(&output)?;
     if let Some(p) = &png {
         render::output::check_writable(p)?;
     }
-    let rows = u64::from(world.camera.height());
+    let rows_rendered = rows.map_or(height, |(a, b)| b - a);
     let bar = std::io::stderr().is_terminal().then(|| {
-        let bar = indicatif::ProgressBar::new(rows);
+        let bar = indicatif::ProgressBar::new(u64::from(rows_rendered));
         if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rows {elapsed}") {
             bar.set_style(style);
         }
@@ -424,8 +477,8 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             b.inc(1);
         }
     };
-    let (frame, stats) =
-        render::frame::render_until(&world, render::frame::Options { threads, ..Default::default() }, &tick, &cancel)?;
+    let options = render::frame::Options { threads, rows, ..Default::default() };
+    let (frame, stats) = render::frame::render_until(&world, options, &tick, &cancel)?;
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
@@ -435,14 +488,22 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         return Err(Error::Interrupted);
     }
     let color = if half { ColorType::F16 } else { ColorType::F32 };
-    let (width, height) = (frame.width, frame.height);
     // The preview first: the EXR writer takes the frame's planes over.
     if let Some(p) = &png {
         render::png::write_png(&frame, p, exposure)?;
     }
-    render::exr::write_exr(frame, &output, color)?;
+    let part = match (tile, rows) {
+        (Some(t), Some((a, b))) => {
+            render::tiles::write_part(frame, &output, color, t, &fingerprint)?;
+            format!(" tile {t}, rows {a}..{b},")
+        }
+        _ => {
+            render::exr::write_exr(frame, &output, color)?;
+            String::new()
+        }
+    };
     eprintln!(
-        "{}: {}x{} in {:.2} s, {} rays, {:.2} Mrays/s",
+        "{}: {}x{}{part} in {:.2} s, {} rays, {:.2} Mrays/s",
         output.display(),
         width,
         height,
@@ -450,6 +511,29 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         stats.rays,
         stats.rays_per_second() / 1e6
     );
+    Ok(())
+}
+
+/// `komplex merge`: the parts of a tiled render joined into the whole
+/// image (and its preview), every part checked before anything is written.
+fn merge(args: MergeArgs) -> Result<(), Error> {
+    let MergeArgs { parts, output, png, exposure } = args;
+    if !exposure.is_finite() {
+        return Err(Error::Options(format!("--exposure must be a finite number of stops, got {exposure}")));
+    }
+    render::output::check_writable(&output)?;
+    if let Some(p) = &png {
+        render::output::check_writable(p)?;
+    }
+    let start = std::time::Instant::now();
+    let merged = render::tiles::merge(&parts)?;
+    let (width, height, count) = (merged.width, merged.height, merged.parts);
+    if let Some(p) = &png {
+        let rgb = merged.rgb().ok_or_else(|| Error::Options("--png: the parts have no R, G and B channels".into()))?;
+        render::png::write_png_planes(p, (width, height), &rgb, exposure)?;
+    }
+    merged.write(&output)?;
+    eprintln!("{}: {width}x{height} from {count} parts in {:.2} s", output.display(), start.elapsed().as_secs_f64());
     Ok(())
 }
 

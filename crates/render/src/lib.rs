@@ -51,6 +51,7 @@ pub mod sampling;
 pub mod shade;
 pub mod slice;
 pub mod texture;
+pub mod tiles;
 pub mod trace;
 pub mod warp;
 pub mod world;

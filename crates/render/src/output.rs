@@ -2,9 +2,10 @@
 //! rename it over the target, so a failed or interrupted write never leaves
 //! a partial file or clobbers an existing one.
 
+use std::ffi::OsString;
 use std::fs::File;
 use std::io::BufWriter;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::error::Error;
 
@@ -81,4 +82,39 @@ pub fn write_atomic(
     // On error the temporary file is removed when `tmp` drops.
     tmp.persist(path).map_err(|e| io(e.error))?;
     Ok(())
+}
+
+/// The file a part of a render goes to: `path` with `.FFFF` (the frame,
+/// four digits or more) and `.tile-I-of-N` (tile `I` of `N`, 0-based)
+/// inserted before its extension, in that order: `out/img.exr` with frame
+/// 7 and tile 2 of 4 is `out/img.0007.tile-2-of-4.exr`; without either it
+/// is `path` itself. A name without an extension gets them at its end.
+///
+/// ```
+/// use std::path::Path;
+/// use render::output::part_path;
+/// assert_eq!(part_path(Path::new("out/img.exr"), None, Some((2, 4))), Path::new("out/img.tile-2-of-4.exr"));
+/// assert_eq!(part_path(Path::new("img.exr"), Some(7), Some((0, 3))), Path::new("img.0007.tile-0-of-3.exr"));
+/// assert_eq!(part_path(Path::new("img"), None, Some((1, 2))), Path::new("img.tile-1-of-2"));
+/// ```
+pub fn part_path(path: &Path, frame: Option<u32>, tile: Option<(u32, u32)>) -> PathBuf {
+    let mut insert = String::new();
+    if let Some(k) = frame {
+        insert.push_str(&format!(".{k:04}"));
+    }
+    if let Some((i, n)) = tile {
+        insert.push_str(&format!(".tile-{i}-of-{n}"));
+    }
+    if insert.is_empty() {
+        return path.to_path_buf();
+    }
+    let Some(name) = path.file_name() else { return path.to_path_buf() };
+    let name = Path::new(name);
+    let mut file: OsString = name.file_stem().unwrap_or(name.as_os_str()).to_os_string();
+    file.push(insert);
+    if let Some(ext) = name.extension() {
+        file.push(".");
+        file.push(ext);
+    }
+    path.with_file_name(file)
 }
