@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""check.py KOMPLEX SCENE WORKDIR: checks the Kubernetes manifests beside
+"""check.py KOMPLEX SCENE WORKDIR [WIDTH HEIGHT]: checks the Kubernetes manifests beside
 this file without a cluster (docs/cluster.md). First what must agree
 between them: the render Job is an Indexed Job whose N completions match
 its `--tile auto/N`, it passes --resume, the merge Job lists exactly the N
@@ -9,7 +9,10 @@ Then it runs the containers' commands here, as Kubernetes would: each
 volume a folder of WORKDIR (the ConfigMap's holding SCENE as scene.json),
 the render command once for each index in JOB_COMPLETION_INDEX, then the
 merge command, and compares the merged image with a one-process render of
-SCENE (scripts/slurm/compare_exr.py). Exits 1 naming the first problem."""
+SCENE (scripts/slurm/compare_exr.py). WIDTH and HEIGHT replace the scene's
+image size in the ConfigMap's copy (a small image keeps the check fast).
+Exits 1 naming the first problem."""
+import json
 import os
 import shutil
 import subprocess
@@ -105,7 +108,7 @@ def check_manifests():
     return n, (rc, rmounts), (mc, mmounts)
 
 
-def run(komplex, scene, work, n, render, merge):
+def run(komplex, scene, work, n, render, merge, size):
     if work.exists():
         shutil.rmtree(work)
     folders = {}
@@ -118,6 +121,10 @@ def run(komplex, scene, work, n, render, merge):
                     folder.mkdir(parents=True)
                     if kind == "configMap":
                         shutil.copy(scene, folder / "scene.json")
+                        if size:
+                            doc = json.loads(scene.read_text())
+                            doc["camera"]["width"], doc["camera"]["height"] = size
+                            (folder / "scene.json").write_text(json.dumps(doc))
                 folders[path] = folder
                 return str(folder) + arg[len(path):]
         return arg
@@ -136,19 +143,22 @@ def run(komplex, scene, work, n, render, merge):
     merged = [local(a, mounts) for a in map(str, c["command"][1:])]
     subprocess.run([komplex] + merged, env=env, check=True)
     whole = work / "whole.exr"
-    subprocess.run([komplex, "render", str(scene), "-o", str(whole)], env=env, check=True, stderr=subprocess.DEVNULL)
+    resized = ["--width", str(size[0]), "--height", str(size[1])] if size else []
+    subprocess.run([komplex, "render", str(scene), "-o", str(whole)] + resized, env=env, check=True,
+                   stderr=subprocess.DEVNULL)
     out = merged[merged.index("-o") + 1]
     subprocess.run([sys.executable, str(COMPARE), out, str(whole)], check=True)
 
 
 def main():
-    if len(sys.argv) != 4:
-        print("usage: scripts/k8s/check.py KOMPLEX SCENE WORKDIR", file=sys.stderr)
+    if len(sys.argv) not in (4, 6):
+        print("usage: scripts/k8s/check.py KOMPLEX SCENE WORKDIR [WIDTH HEIGHT]", file=sys.stderr)
         return 2
     komplex, scene, work = os.path.abspath(sys.argv[1]), Path(sys.argv[2]), Path(sys.argv[3]).resolve()
+    size = tuple(int(v) for v in sys.argv[4:6])
     try:
         n, render, merge = check_manifests()
-        run(komplex, scene, work, n, render, merge)
+        run(komplex, scene, work, n, render, merge, size)
     except Problem as e:
         print(f"scripts/k8s/check.py: {e}", file=sys.stderr)
         return 1

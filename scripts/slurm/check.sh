@@ -85,13 +85,16 @@ mkdir -p "$dir"
 echo "cluster check: the Kubernetes manifests agree with each other and their commands, run here, give the one-process image"
 python3 -c 'import yaml' 2>/dev/null \
     || python3 -m pip install --quiet --disable-pip-version-check PyYAML==6.0.3
-python3 scripts/k8s/check.py "$KOMPLEX" "$scene" "$dir/k8s"
+python3 scripts/k8s/check.py "$KOMPLEX" "$scene" "$dir/k8s" 96 70
+echo "cluster check: $((SECONDS - start)) s so far"
 
 echo "cluster check: bringing up the one-node Slurm cluster"
 "$slurm/one-node.sh" up
+echo "cluster check: $((SECONDS - start)) s so far"
 submit_and_wait
 "$KOMPLEX" render "$scene" "${size[@]}" -o "$dir/whole.exr" 2>/dev/null
 python3 "$slurm/compare_exr.py" "$dir/img.exr" "$dir/whole.exr" || fail "the merged image differs from the one-process render"
+echo "cluster check: $((SECONDS - start)) s so far"
 
 echo "cluster check: resubmitting with tile 2 and the merged image deleted (--resume renders only tile 2)"
 tile() { echo "$dir/img.tile-$1-of-4.exr"; }
