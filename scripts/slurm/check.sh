@@ -64,7 +64,7 @@ submit_and_wait() {
     echo "$out"
     render=$(awk '$1 == "render" { print $2 }' <<<"$out" | tr -d :)
     merge=$(awk '$1 == "merge" { print $2 }' <<<"$out" | tr -d :)
-    [ -n "$render" ] && [ -n "$merge" ] || fail "no job ids in submit.sh's output"
+    if [ -z "$render" ] || [ -z "$merge" ]; then fail "no job ids in submit.sh's output"; fi
     jobs=("$render" "$merge")
     local deadline=$((SECONDS + timeout))
     while [ -n "$(squeue -h -j "$render,$merge" -o %i 2>/dev/null)" ]; do
@@ -74,8 +74,8 @@ submit_and_wait() {
     local done_render done_merge
     done_render=$(scontrol show job -o "$render" | grep -c 'JobState=COMPLETED' || true)
     done_merge=$(scontrol show job -o "$merge" | grep -c 'JobState=COMPLETED' || true)
-    [ "$done_render" -eq 4 ] && [ "$done_merge" -eq 1 ] \
-        || fail "not every task completed ($done_render of 4 render tasks, $done_merge of 1 merge)"
+    [ "$done_render" -eq 4 ] || fail "not every task completed ($done_render of 4 render tasks, $done_merge of 1 merge)"
+    [ "$done_merge" -eq 1 ] || fail "not every task completed ($done_render of 4 render tasks, $done_merge of 1 merge)"
     jobs=()
 }
 

@@ -43,13 +43,13 @@ live_pid() {
 
 # Stops the daemon whose pid file is $1 (TERM, then KILL after 10 s).
 stop() {
-    local name=$1 file=$2 pid i
+    local name=$1 file=$2 pid
     if ! pid=$(live_pid "$file"); then
         echo "$name: not running"
         return 0
     fi
     kill -TERM "$pid" 2>/dev/null || true
-    for i in $(seq 1 100); do
+    for _ in $(seq 1 100); do
         kill -0 "$pid" 2>/dev/null || break
         sleep 0.1
     done
