@@ -69,6 +69,11 @@ submit_and_wait() {
     local deadline=$((SECONDS + timeout))
     while [ -n "$(squeue -h -j "$render,$merge" -o %i 2>/dev/null)" ]; do
         [ "$SECONDS" -lt "$deadline" ] || fail "the jobs are still queued or running after $timeout s"
+        # A task that cannot start (a full disk, say) drains the node and is
+        # held: fail now rather than at the time-out.
+        case "$(sinfo -h -o %T 2>/dev/null)" in
+            drain* | down* | fail*) fail "the node is $(sinfo -h -o %T): $(sinfo -h -R -o %E)" ;;
+        esac
         sleep 0.5
     done
     local done_render done_merge

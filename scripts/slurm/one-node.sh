@@ -41,24 +41,32 @@ live_pid() {
     [ -n "$pid" ] && kill -0 "$pid" 2>/dev/null && echo "$pid"
 }
 
-# Stops the daemon whose pid file is $1 (TERM, then KILL after 10 s).
+# Stops the daemons whose names and pid files are given in pairs: TERM to
+# all at once (each takes a second or two to exit), then KILL to any still
+# alive after 10 s.
 stop() {
-    local name=$1 file=$2 pid
-    if ! pid=$(live_pid "$file"); then
-        echo "$name: not running"
-        return 0
-    fi
-    kill -TERM "$pid" 2>/dev/null || true
-    for _ in $(seq 1 100); do
-        kill -0 "$pid" 2>/dev/null || break
-        sleep 0.1
+    local names=() pids=() files=() pid i
+    while [ $# -gt 0 ]; do
+        if pid=$(live_pid "$2"); then
+            kill -TERM "$pid" 2>/dev/null || true
+            names+=("$1") pids+=("$pid") files+=("$2")
+        else
+            echo "$1: not running"
+        fi
+        shift 2
     done
-    if kill -0 "$pid" 2>/dev/null; then
-        echo "$name: pid $pid still alive after 10 s, sending KILL" >&2
-        kill -KILL "$pid" 2>/dev/null || true
-    fi
-    rm -f "$file"
-    echo "$name: stopped (pid $pid)"
+    for i in "${!pids[@]}"; do
+        for _ in $(seq 1 100); do
+            kill -0 "${pids[$i]}" 2>/dev/null || break
+            sleep 0.1
+        done
+        if kill -0 "${pids[$i]}" 2>/dev/null; then
+            echo "${names[$i]}: pid ${pids[$i]} still alive after 10 s, sending KILL" >&2
+            kill -KILL "${pids[$i]}" 2>/dev/null || true
+        fi
+        rm -f "${files[$i]}"
+        echo "${names[$i]}: stopped (pid ${pids[$i]})"
+    done
 }
 
 install_packages() {
@@ -163,9 +171,7 @@ up() {
 }
 
 down() {
-    stop slurmd "$slurmd_pid"
-    stop slurmctld "$ctld_pid"
-    stop munged "$munge_pid"
+    stop slurmd "$slurmd_pid" slurmctld "$ctld_pid" munged "$munge_pid"
 }
 
 [ $# -eq 1 ] || usage
