@@ -16,6 +16,7 @@ mod mutations;
 mod shading;
 mod slice;
 mod textures;
+mod tiles;
 mod trace;
 
 mod path;

@@ -401,35 +401,64 @@ pub fn merge(paths: &[PathBuf]) -> Result<Merged, Error> {
         return Err(Error::Options(format!("{which}: none of the {given} parts given holds it{expected}")));
     }
     let (width, height) = first.image;
-    let n = width * height;
-    let mut channels: Vec<(String, FlatSamples)> = first
-        .channels
-        .iter()
-        .map(|(name, t)| {
-            let samples = match t {
-                SampleType::F16 => FlatSamples::F16(Vec::with_capacity(n)),
-                SampleType::F32 => FlatSamples::F32(Vec::with_capacity(n)),
-                SampleType::U32 => FlatSamples::U32(Vec::with_capacity(n)),
-            };
-            (name.clone(), samples)
-        })
-        .collect();
+    let mut channels: Vec<(String, FlatSamples)> = Vec::new();
     for (path, _) in by_index.values() {
-        let part = read_pixels(path)?;
-        let list = part.layer_data.channel_data.list;
-        if list.len() != channels.len() {
-            return Err(data(path, "the channels read differ from the header's".into()));
+        let part = read_pixels(path)?.layer_data.channel_data.list;
+        if channels.is_empty() {
+            // The first part's samples, with room for the others'.
+            let n = width * height;
+            channels = part.into_iter().map(|c| (c.name.to_string(), with_capacity(c.sample_data, n))).collect();
+            continue;
         }
-        for ((name, out), channel) in channels.iter_mut().zip(list) {
+        let kinds = |list: &mut dyn Iterator<Item = (String, SampleType)>| list.collect::<Vec<_>>();
+        let have = kinds(&mut channels.iter().map(|(n, s)| (n.clone(), sample_type(s))));
+        let read = kinds(&mut part.iter().map(|c| (c.name.to_string(), sample_type(&c.sample_data))));
+        if read != have {
+            let names =
+                |c: &[(String, SampleType)]| c.iter().map(|(n, t)| format!("{n} {t:?}")).collect::<Vec<_>>().join(", ");
+            return Err(data(
+                path,
+                format!(
+                    "a foreign part: its channels are [{}], not [{}], unlike {} (the first part)",
+                    names(&read),
+                    names(&have),
+                    first_path.display()
+                ),
+            ));
+        }
+        for ((_, out), channel) in channels.iter_mut().zip(part) {
             match (out, channel.sample_data) {
                 (FlatSamples::F16(o), FlatSamples::F16(s)) => o.extend_from_slice(&s),
                 (FlatSamples::F32(o), FlatSamples::F32(s)) => o.extend_from_slice(&s),
                 (FlatSamples::U32(o), FlatSamples::U32(s)) => o.extend_from_slice(&s),
-                _ => return Err(data(path, format!("channel {name} has another sample type than its header says"))),
+                // The types were compared just above.
+                _ => {}
             }
         }
     }
     Ok(Merged { width: width as u32, height: height as u32, parts: count, channels })
+}
+
+/// The sample type of `samples`.
+fn sample_type(samples: &FlatSamples) -> SampleType {
+    match samples {
+        FlatSamples::F16(_) => SampleType::F16,
+        FlatSamples::F32(_) => SampleType::F32,
+        FlatSamples::U32(_) => SampleType::U32,
+    }
+}
+
+/// `samples` with room for `n` in all.
+fn with_capacity(samples: FlatSamples, n: usize) -> FlatSamples {
+    fn grown<T>(mut v: Vec<T>, n: usize) -> Vec<T> {
+        v.reserve(n.saturating_sub(v.len()));
+        v
+    }
+    match samples {
+        FlatSamples::F16(v) => FlatSamples::F16(grown(v, n)),
+        FlatSamples::F32(v) => FlatSamples::F32(grown(v, n)),
+        FlatSamples::U32(v) => FlatSamples::U32(grown(v, n)),
+    }
 }
 
 /// The file name tile `want` would have beside `path`, a part named as
