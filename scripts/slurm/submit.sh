@@ -9,12 +9,13 @@ set -euo pipefail
 usage() {
     cat >&2 <<'USAGE'
 usage: scripts/slurm/submit.sh SCENE OUT.exr --tiles N | --frames A..B [--tiles N]
-                               [--threads T] [--logs DIR] [-- komplex render options]
+                               [--threads T] [--max-running M] [--logs DIR] [-- komplex render options]
 
   --tiles N      render N tiles (one array task each), then merge them into OUT.exr
   --frames A..B  render frames A to B (inclusive) into OUT.AAAA.exr ... OUT.BBBB.exr;
                  with --tiles N, N tiles per frame and one merge per frame
   --threads T    cores per task (sbatch --cpus-per-task) and komplex's --threads (default 1)
+  --max-running M  at most M render tasks at once (sbatch --array=...%M; default: no limit)
   --logs DIR     where the jobs' logs go (default: OUT.exr's directory/logs)
 
 Environment: KOMPLEX, the komplex binary (default: komplex on PATH); sbatch's own
@@ -34,13 +35,14 @@ here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 [ $# -ge 2 ] || usage
 scene=$1 out=$2
 shift 2
-tiles="" frames="" threads=1 logs=""
+tiles="" frames="" threads=1 logs="" throttle=""
 while [ $# -gt 0 ]; do
     case "$1" in
         --tiles) [ $# -ge 2 ] || usage; tiles=$2; shift 2 ;;
         --frames) [ $# -ge 2 ] || usage; frames=$2; shift 2 ;;
         --threads) [ $# -ge 2 ] || usage; threads=$2; shift 2 ;;
         --logs) [ $# -ge 2 ] || usage; logs=$2; shift 2 ;;
+        --max-running) [ $# -ge 2 ] || usage; throttle=$2; shift 2 ;;
         --) shift; break ;;
         -h | --help) usage ;;
         *) echo "submit.sh: unknown option '$1'" >&2; usage ;;
@@ -51,6 +53,10 @@ done
 [[ "$threads" =~ ^[1-9][0-9]*$ ]] || die "--threads must be a positive integer, not '$threads'"
 if [ -n "$tiles" ]; then
     [[ "$tiles" =~ ^[1-9][0-9]*$ ]] || die "--tiles must be a positive integer, not '$tiles'"
+fi
+if [ -n "$throttle" ]; then
+    [[ "$throttle" =~ ^[1-9][0-9]*$ ]] || die "--max-running must be a positive integer, not '$throttle'"
+    throttle=%$throttle
 fi
 count=${tiles:-1}
 if [ -n "$frames" ]; then
@@ -76,7 +82,7 @@ select=()
 [ -n "$tiles" ] && select+=(--tiles "$tiles")
 [ -n "$frames" ] && select+=(--frames "$frames")
 
-render=$(sbatch --parsable --array="0-$((count - 1))" --cpus-per-task="$threads" \
+render=$(sbatch --parsable --array="0-$((count - 1))$throttle" --cpus-per-task="$threads" \
     --output="$logs/%x-%A_%a.out" \
     "$here/render.sbatch" "$scene" "$out" "${select[@]}" -- "$@")
 render=${render%%;*}
