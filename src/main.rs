@@ -90,6 +90,13 @@ struct RenderArgs {
     /// Exposure of the PNG preview in stops (pixel values are scaled by 2^E).
     #[arg(long, value_name = "E", default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
+    /// Render frame K of an animated scene to OUT.KKKK.exr (and the PNG likewise).
+    #[arg(long, value_name = "K", conflicts_with = "frames")]
+    frame: Option<u32>,
+    /// Render frames A to B, both included, one after another, each to its own OUT.KKKK.exr;
+    /// without A..B the scene's animation.frames.
+    #[arg(long, value_name = "A..B", num_args = 0..=1, default_missing_value = "")]
+    frames: Option<String>,
 }
 
 #[derive(clap::Args)]
@@ -361,54 +368,78 @@ fn run(command: Command) -> Result<(), Error> {
 }
 
 /// `komplex render`: the EXR (and the PNG preview), both checked writable
-/// before the render and written only once it is complete.
+/// before the render and written only once it is complete; with `--frame`
+/// or `--frames`, one such pair per frame, each written as it is done.
 fn render(args: RenderArgs) -> Result<(), Error> {
-    let RenderArgs {
-        scene,
-        output,
-        png,
-        size,
-        run: RunArgs { threads, precision },
-        samples,
-        spp,
-        noise,
-        seed,
-        half,
-        exposure,
-    } = args;
-    render::frame::set_global_threads(threads)?;
+    render::frame::set_global_threads(args.run.threads)?;
     let cancel = interrupt_flag();
-    if !exposure.is_finite() {
-        return Err(Error::Options(format!("--exposure must be a finite number of stops, got {exposure}")));
+    if !args.exposure.is_finite() {
+        return Err(Error::Options(format!("--exposure must be a finite number of stops, got {}", args.exposure)));
     }
-    let mut world = render::load(&scene)?;
-    if let Some(n) = samples {
+    let output = args.output.clone().unwrap_or_else(|| default_output(&args.scene));
+    if args.frame.is_none() && args.frames.is_none() {
+        let world = render::load(&args.scene)?;
+        return render_image(world, &args, &output, args.png.as_deref(), &cancel);
+    }
+    let animation = render::animate::Animation::read(&args.scene)?;
+    let frames = match (args.frame, args.frames.as_deref()) {
+        (Some(k), _) => k..=k,
+        (None, Some("") | None) => animation.frames().ok_or_else(|| {
+            Error::Options(format!(
+                "--frames without A..B renders the scene's \"animation\": {{\"frames\": [A, B]}}, which {} lacks",
+                args.scene.display()
+            ))
+        })?,
+        (None, Some(range)) => render::animate::parse_frames(range)?,
+    };
+    for k in frames {
+        if cancel.load(Ordering::Relaxed) {
+            return Err(Error::Interrupted);
+        }
+        let world = animation.world_at(k)?;
+        let part = |p: &Path| render::output::part_path(p, Some(k), None);
+        render_image(world, &args, &part(&output), args.png.as_deref().map(part).as_deref(), &cancel)?;
+    }
+    Ok(())
+}
+
+/// One image of `komplex render`: the options applied to `world`, the
+/// outputs checked writable, the render, then the PNG and the EXR.
+fn render_image(
+    mut world: render::world::World,
+    args: &RenderArgs,
+    output: &Path,
+    png: Option<&Path>,
+    cancel: &Arc<AtomicBool>,
+) -> Result<(), Error> {
+    let RenderArgs { size, run: RunArgs { threads, precision }, samples, spp, noise, seed, half, exposure, .. } = args;
+    let (threads, half, exposure) = (*threads, *half, *exposure);
+    if let Some(n) = *samples {
         if !(1..=16).contains(&n) {
             return Err(Error::Options(format!("--samples must be between 1 and 16, got {n}")));
         }
         world.settings.samples = n;
     }
-    if let Some(n) = spp {
+    if let Some(n) = *spp {
         if !(1..=render::limits::MAX_SPP).contains(&n) {
             return Err(Error::Options(format!("--spp must be between 1 and {}, got {n}", render::limits::MAX_SPP)));
         }
         world.settings.spp = Some(n);
     }
-    if let Some(t) = noise {
+    if let Some(t) = *noise {
         if !(t.is_finite() && t > 0.0) {
             return Err(Error::Options(format!("--noise must be a finite number > 0, got {t}")));
         }
         world.settings.noise = Some(t);
     }
-    if let Some(s) = seed {
+    if let Some(s) = *seed {
         world.settings.seed = s;
     }
     size.apply(&mut world)?;
-    world.complex.set_precision(precision.into());
-    let output = output.unwrap_or_else(|| default_output(&scene));
+    world.complex.set_precision((*precision).into());
     // Fail before the render, not after it, if an output cannot be written.
-    render::output::check_writable(&output)?;
-    if let Some(p) = &png {
+    render::output::check_writable(output)?;
+    if let Some(p) = png {
         render::output::check_writable(p)?;
     }
     let rows = u64::from(world.camera.height());
@@ -425,7 +456,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         }
     };
     let (frame, stats) =
-        render::frame::render_until(&world, render::frame::Options { threads, ..Default::default() }, &tick, &cancel)?;
+        render::frame::render_until(&world, render::frame::Options { threads, ..Default::default() }, &tick, cancel)?;
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
@@ -437,10 +468,10 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     let color = if half { ColorType::F16 } else { ColorType::F32 };
     let (width, height) = (frame.width, frame.height);
     // The preview first: the EXR writer takes the frame's planes over.
-    if let Some(p) = &png {
+    if let Some(p) = png {
         render::png::write_png(&frame, p, exposure)?;
     }
-    render::exr::write_exr(frame, &output, color)?;
+    render::exr::write_exr(frame, output, color)?;
     eprintln!(
         "{}: {}x{} in {:.2} s, {} rays, {:.2} Mrays/s",
         output.display(),

@@ -135,7 +135,7 @@ fn unknown_keys_suggest_the_nearest_name() {
     check(
         &*blocks(r#"{ "objects": [ { "sphere": {}, "transform": [ { "rotate_yy": 4 } ] } ] }"#),
         1,
-        &["blocks[0].objects[0].transform[0]", "did you mean `rotate_y`?"],
+        &["blocks[0].objects[0].transform[0].rotate_yy, line 1, column 155", "did you mean `rotate_y`?"],
     );
     check(&*format!(r#"{{ {CAMERA}, "setings": {{}}, "blocks": [] }}"#), 1, &["setings", "did you mean `settings`?"]);
     check(

@@ -35,19 +35,26 @@ pub(crate) fn finite_triple(t: &Triple, place: impl std::fmt::Display, what: &st
 fn steps_transform(steps: &[Step], place: Place<'_>) -> Result<Transform, SceneError> {
     let mut m = Transform::identity();
     for (i, step) in steps.iter().enumerate() {
-        let t = match step {
-            Step::Translate(v) => Transform::translate(vec3(*v)),
-            Step::Scale(Scale::Uniform(s)) => Transform::scale(*s),
-            Step::Scale(Scale::PerAxis(v)) => Transform::scale_xyz(vec3(*v)),
-            Step::RotateX(d) => Transform::rotate_x_degrees(*d),
-            Step::RotateY(d) => Transform::rotate_y_degrees(*d),
-            Step::RotateZ(d) => Transform::rotate_z_degrees(*d),
-            Step::Matrix(rows) => Transform::from_matrix(&Matrix4::from_fn(|r, c| rows[r][c])),
-        }
-        .map_err(|e| SceneError::semantic(&place.item("transform", i).to_string(), e.to_string()))?;
+        let t = step_transform(step)
+            .map_err(|e| SceneError::semantic(&place.item("transform", i).to_string(), e.to_string()))?;
         m = m.then(&t);
     }
     Ok(m)
+}
+
+/// One step's transform; a keyed step's at its first key (a scene resolved
+/// at a frame, `SceneFile::at_frame`, has none).
+fn step_transform(step: &Step) -> Result<Transform, GeometryError> {
+    match step {
+        Step::Translate(v) => Transform::translate(vec3(*v)),
+        Step::Scale(Scale::Uniform(s)) => Transform::scale(*s),
+        Step::Scale(Scale::PerAxis(v)) => Transform::scale_xyz(vec3(*v)),
+        Step::RotateX(d) => Transform::rotate_x_degrees(*d),
+        Step::RotateY(d) => Transform::rotate_y_degrees(*d),
+        Step::RotateZ(d) => Transform::rotate_z_degrees(*d),
+        Step::Matrix(rows) => Transform::from_matrix(&Matrix4::from_fn(|r, c| rows[r][c])),
+        Step::Keyed(k) => step_transform(&k.first()),
+    }
 }
 
 /// A JSON path (`blocks[2].objects[0].transform[1]`) not yet written out:
