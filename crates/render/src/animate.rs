@@ -110,11 +110,11 @@ fn turned(v: &Animated<Triple>, frame: f64, place: &str, what: &str) -> Result<T
             let zero = |v: &Triple| !v.iter().all(|x| x.is_finite()) || v.iter().all(|x| *x == 0.0);
             let (at, msg) = if zero(from) || zero(to) {
                 let i = if zero(from) { index - 1 } else { index };
-                (i, format!("the {what} is zero or not finite, so frame {frame} between two keys has no direction"))
+                (i, format!("the {what} is zero or not finite, so the frames next to this key have no direction"))
             } else {
                 let msg = format!(
-                    "keys {} and {index} point in opposite directions: the turn between them (frame {frame}) \
-                     could go any way; add a key in between",
+                    "keys {} and {index} point in opposite directions: the turn between them could go any way; \
+                     add a key in between",
                     index - 1
                 );
                 (index, msg)
