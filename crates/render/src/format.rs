@@ -421,23 +421,12 @@ impl KeyedStep {
             KeyedStep::RotateZ(k) => Step::RotateZ(k.at(frame)),
         }
     }
-
-    /// The plain step at its first key.
-    pub fn first(&self) -> Step {
-        match self {
-            KeyedStep::Translate(k) => Step::Translate(*k.first()),
-            KeyedStep::Scale(k) => Step::Scale(k.first().clone()),
-            KeyedStep::RotateX(k) => Step::RotateX(*k.first()),
-            KeyedStep::RotateY(k) => Step::RotateY(*k.first()),
-            KeyedStep::RotateZ(k) => Step::RotateZ(*k.first()),
-        }
-    }
 }
 
 // By hand rather than derived: a step's value may be keys, read into
-// `Step::Keyed`, and a second key is named. A plain value is read straight
-// from its array or number as the derived reader did; errors name the
-// same places with the same messages.
+// `Step::Keyed`. Read as serde's derived reader reads an enum (the same
+// calls, so a plain step costs what it did), with the same messages and
+// places for the same mistakes.
 impl<'de> Deserialize<'de> for Step {
     fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
         #[derive(Deserialize)]
@@ -450,68 +439,47 @@ impl<'de> Deserialize<'de> for Step {
             RotateZ,
             Matrix,
         }
-        const KINDS: &str = "`translate`, `scale`, `rotate_x`, `rotate_y`, `rotate_z` or `matrix`";
+        const KINDS: &[&str] = &["translate", "scale", "rotate_x", "rotate_y", "rotate_z", "matrix"];
 
         struct Steps;
         impl<'de> serde::de::Visitor<'de> for Steps {
             type Value = Step;
 
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                write!(f, "a transform step: an object with one key, {KINDS}")
+                f.write_str("enum Step")
             }
 
-            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Step, A::Error> {
-                use serde::de::Error;
+            fn visit_enum<A: serde::de::EnumAccess<'de>>(self, data: A) -> Result<Step, A::Error> {
+                use serde::de::VariantAccess;
                 use Animated::{Fixed, Keyed};
-                let Some(kind) = map.next_key::<Kind>()? else {
-                    return Err(A::Error::custom(format!("a transform step needs one key: {KINDS}")));
-                };
                 let keyed = |k: KeyedStep| Step::Keyed(Box::new(k));
-                let (name, step) = match kind {
-                    Kind::Translate => (
-                        "translate",
-                        match map.next_value()? {
-                            Fixed(v) => Step::Translate(v),
-                            Keyed(k) => keyed(KeyedStep::Translate(k)),
-                        },
-                    ),
-                    Kind::Scale => (
-                        "scale",
-                        match map.next_value()? {
-                            Fixed(v) => Step::Scale(v),
-                            Keyed(k) => keyed(KeyedStep::Scale(k)),
-                        },
-                    ),
-                    Kind::RotateX => (
-                        "rotate_x",
-                        match map.next_value()? {
-                            Fixed(v) => Step::RotateX(v),
-                            Keyed(k) => keyed(KeyedStep::RotateX(k)),
-                        },
-                    ),
-                    Kind::RotateY => (
-                        "rotate_y",
-                        match map.next_value()? {
-                            Fixed(v) => Step::RotateY(v),
-                            Keyed(k) => keyed(KeyedStep::RotateY(k)),
-                        },
-                    ),
-                    Kind::RotateZ => (
-                        "rotate_z",
-                        match map.next_value()? {
-                            Fixed(v) => Step::RotateZ(v),
-                            Keyed(k) => keyed(KeyedStep::RotateZ(k)),
-                        },
-                    ),
-                    Kind::Matrix => ("matrix", Step::Matrix(map.next_value::<PlainMatrix>()?.0)),
-                };
-                if let Some(extra) = map.next_key::<String>()? {
-                    return Err(A::Error::custom(format!("a transform step has one key, got `{name}` and `{extra}`")));
-                }
-                Ok(step)
+                let (kind, value) = data.variant::<Kind>()?;
+                Ok(match kind {
+                    Kind::Translate => match value.newtype_variant()? {
+                        Fixed(v) => Step::Translate(v),
+                        Keyed(k) => keyed(KeyedStep::Translate(k)),
+                    },
+                    Kind::Scale => match value.newtype_variant()? {
+                        Fixed(v) => Step::Scale(v),
+                        Keyed(k) => keyed(KeyedStep::Scale(k)),
+                    },
+                    Kind::RotateX => match value.newtype_variant()? {
+                        Fixed(v) => Step::RotateX(v),
+                        Keyed(k) => keyed(KeyedStep::RotateX(k)),
+                    },
+                    Kind::RotateY => match value.newtype_variant()? {
+                        Fixed(v) => Step::RotateY(v),
+                        Keyed(k) => keyed(KeyedStep::RotateY(k)),
+                    },
+                    Kind::RotateZ => match value.newtype_variant()? {
+                        Fixed(v) => Step::RotateZ(v),
+                        Keyed(k) => keyed(KeyedStep::RotateZ(k)),
+                    },
+                    Kind::Matrix => Step::Matrix(value.newtype_variant::<PlainMatrix>()?.0),
+                })
             }
         }
-        deserializer.deserialize_map(Steps)
+        deserializer.deserialize_enum("Step", KINDS, Steps)
     }
 }
 

@@ -130,9 +130,8 @@ impl<T: Keyable> Keys<T> {
         }
     }
 
-    /// Reads the keys' list, checking them (used by [`Animated`]'s reader
-    /// and by the format's keyed steps).
-    pub fn read_list<'de, A: SeqAccess<'de>>(mut seq: A) -> Result<Self, A::Error> {
+    /// Reads the list of keys, checking each as it comes.
+    fn read_list<'de, A: SeqAccess<'de>>(mut seq: A) -> Result<Self, A::Error> {
         let mut keys: Vec<Key<T>> = Vec::with_capacity(seq.size_hint().unwrap_or(2).min(64));
         while let Some(key) = seq.next_element_seed(NextKey::<T>(keys.last().map(|k| k.frame), PhantomData))? {
             keys.push(key);
@@ -187,7 +186,7 @@ impl<'de, T: Keyable> Deserialize<'de> for Keys<T> {
 
 /// The rest of an object whose keys are being read: exactly one member,
 /// `keys`.
-pub fn keys_from_map<'de, T: Keyable, A: MapAccess<'de>>(mut map: A) -> Result<Keys<T>, A::Error> {
+fn keys_from_map<'de, T: Keyable, A: MapAccess<'de>>(mut map: A) -> Result<Keys<T>, A::Error> {
     let mut keys = None;
     while let Some(name) = map.next_key::<String>()? {
         if name != "keys" {
