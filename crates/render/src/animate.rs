@@ -226,6 +226,13 @@ mod tests {
                { "rotate_z": 30 }"#,
         );
         assert!(s.is_animated());
+        // Keyed steps are written back as they are read.
+        let text = serde_json::to_string(&s).unwrap();
+        assert!(
+            text.contains(r#"{"rotate_y":{"keys":[{"frame":1.0,"value":0.0},{"frame":3.0,"value":90.0}]}}"#),
+            "{text}"
+        );
+        assert_eq!(serde_json::to_string(&SceneFile::from_json(&text).unwrap()).unwrap(), text);
         for (frame, translate, angle, scale) in [
             (0.0, [0.0, 0.0, 0.0], 0.0, [1.0, 1.0, 1.0]),
             (2.0, [1.0, -2.0, 0.5], 45.0, [1.0, 1.0, 1.0]),
