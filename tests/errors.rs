@@ -323,6 +323,98 @@ fn empty_blocks_and_empty_scenes_are_errors() {
     check(&*blocks(r#"{ "group": "g", "blocks": [] }"#), 1, &["the scene has no blocks"]);
 }
 
+#[test]
+fn bad_steps_keys_and_frames_name_the_place() {
+    let step = |s: &str| blocks(&format!(r#"{{ "objects": [ {{ "sphere": {{}}, "transform": [ {s} ] }} ] }}"#));
+    let at = "blocks[0].objects[0].transform[0]";
+    check(
+        &*step(
+            r#"{ "translate": { "keys": [ { "frame": 2, "value": [0, 0, 0] }, { "frame": 1, "value": [1, 0, 0] } ] } }"#,
+        ),
+        1,
+        &[&format!("{at}.translate.keys[1], line 1, column 241: key frames must increase: frame 1 follows frame 2")],
+    );
+    check(
+        &*step(r#"{ "rotate_x": { "keys": [] } }"#),
+        1,
+        &[&format!("{at}.rotate_x.keys, line 1, column 168: keys must not be empty")],
+    );
+    check(
+        &*step(r#"{ "rotate_x": { "keys": [ { "frame": -1, "value": 5 } ] } }"#),
+        1,
+        &[&format!(
+            "{at}.rotate_x.keys[0], line 1, column 197: a key's frame must be between 0 and 4294967295, got -1"
+        )],
+    );
+    check(
+        &*step(r#"{ "matrix": { "keys": [] } }"#),
+        1,
+        &[&format!("{at}.matrix, line 1, column 156: a `matrix` step cannot be keyed: key `translate`, `scale`")],
+    );
+    check(
+        &*step(r#"{ "rotate_x": { "kyes": [] } }"#),
+        1,
+        &[&format!("{at}.rotate_x, line 1, column 164: unknown field `kyes`, expected `keys` (did you mean `keys`?)")],
+    );
+    check(
+        &*format!(
+            r#"{{ "animation": {{ "frames": [5, 1] }}, {CAMERA}, "blocks": [ {{ "objects": [ {{ "sphere": {{}} }} ] }} ] }}"#
+        ),
+        1,
+        &["animation.frames, line 1, column 28: the first frame comes after the last: [5, 1]"],
+    );
+    // Errors that depend on the frame: `--frame 2` or `3` on `anim.json`.
+    let at_frame = |json: &str, frame: &str, needle: &str| {
+        check_with(
+            &[("anim.json", json.as_bytes())],
+            &["render", "anim.json", "-o", "out.exr", "--frame", frame],
+            1,
+            &[needle],
+        );
+    };
+    at_frame(
+        &step(r#"{ "scale": { "keys": [ { "frame": 1, "value": 1 }, { "frame": 5, "value": -1 } ] } }"#),
+        "3",
+        "anim.json: blocks[0].objects[0].transform[0], line 1, column 143: at frame 3: block \"block 1\", object 1: the transform is singular",
+    );
+    let direction = |to: &str| {
+        format!(
+            r#"{{ "camera": {{ "eye": [0, 0, 5], "direction": {{ "keys": [ {{ "frame": 1, "value": [0, 0, -1] }}, {{ "frame": 3, "value": {to} }} ] }}, "width": 8, "height": 6 }}, "blocks": [ {{ "objects": [ {{ "sphere": {{}} }} ] }} ] }}"#
+        )
+    };
+    at_frame(
+        &direction("[0, 0, 1]"),
+        "2",
+        "anim.json: camera.direction.keys[1], line 1, column 95: at frame 2: keys 0 and 1 point in opposite directions",
+    );
+    at_frame(
+        &direction("[0, 0, 0]"),
+        "2",
+        "camera.direction.keys[1], line 1, column 95: at frame 2: the direction is zero or not finite",
+    );
+    // The options.
+    check(
+        &["render", "ok.json", "-o", "out.exr", "--frame", "1", "--frames", "1..2"],
+        2,
+        &["the argument '--frame <K>' cannot be used with '--frames [<A..B>]'"],
+    );
+    check(
+        &["render", "ok.json", "-o", "out.exr", "--frames", "1-3"],
+        1,
+        &["--frames \"1-3\": expected A..B, the first and the last frame (both rendered)"],
+    );
+    check(
+        &["render", "ok.json", "-o", "out.exr", "--frames", "5..1"],
+        1,
+        &["--frames 5..1: the first frame comes after the last"],
+    );
+    check(
+        &["render", "ok.json", "-o", "out.exr", "--frames"],
+        1,
+        &["--frames without A..B renders the scene's \"animation\": {\"frames\": [A, B]}, which ok.json lacks"],
+    );
+}
+
 /// A scene whose camera is at `[0, 0, 5]` with the further members
 /// `members` is refused (exit status 1) with each of `needles` in the message.
 fn bad_camera(members: &str, needles: &[&str]) {

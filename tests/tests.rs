@@ -4,6 +4,7 @@
 mod geom;
 mod support;
 
+mod anim;
 mod bench;
 mod camera;
 mod cli;

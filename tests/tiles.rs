@@ -314,3 +314,26 @@ fn the_default_output_gets_the_tile_before_its_extension() {
         std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     assert_eq!(names, ["table.tile-1-of-2.exr"]);
 }
+
+#[test]
+fn tiles_of_a_frame_merge_into_that_frame_and_are_foreign_to_another_frame() {
+    let dir = tempdir();
+    let d = dir.path();
+    let orbit = scene("orbit.json");
+    let o = orbit.to_str().unwrap();
+    let size = ["--width", "12", "--height", "10"];
+    komplex_ok(d, &[&["render", o, "-o", "one.exr", "--frame", "5"], &size[..]].concat());
+    for frame in ["5", "6"] {
+        for tile in ["0/2", "1/2"] {
+            komplex_ok(d, &[&["render", o, "-o", "img.exr", "--frame", frame, "--tile", tile], &size[..]].concat());
+        }
+    }
+    let part = |frame: &str, i: u32| d.join(format!("img.000{frame}.tile-{i}-of-2.exr"));
+    let merged = merge(d, &[part("5", 0), part("5", 1)]);
+    assert_eq!(decoded(&merged), decoded(&d.join("one.0005.exr")));
+    // Frame 6's part is a tile of another render, even if only transforms move.
+    let (a, b) = (part("5", 0), part("6", 1));
+    let out = crate::support::komplex(d, &["merge", a.to_str().unwrap(), b.to_str().unwrap(), "-o", "mixed.exr"]);
+    assert!(!out.status.success() && text(&out).contains("a foreign part"), "{}", text(&out));
+    assert!(!d.join("mixed.exr").exists());
+}

@@ -18,6 +18,7 @@ use crate::format::{
     Axis, CameraSpec, ColourSpec, CylinderSpec, Entry, LightSpec, MaterialSpec, ObjectSpec, ProjectionSpec, Scale,
     SceneFile, SphereSpec, Step,
 };
+use crate::keys::Animated;
 use crate::sampling::{mix, GOLDEN};
 use crate::world::{Model, Settings};
 
@@ -42,9 +43,9 @@ fn light(position: [f64; 3], c: f64) -> LightSpec {
 
 fn camera(eye: [f64; 3], direction: [f64; 3], aperture: f64) -> CameraSpec {
     CameraSpec {
-        eye,
-        direction,
-        up: [0.0, 1.0, 0.0],
+        eye: Animated::Fixed(eye),
+        direction: Animated::Fixed(direction),
+        up: Animated::Fixed([0.0, 1.0, 0.0]),
         width: 640,
         height: 480,
         aperture,
@@ -109,6 +110,7 @@ pub fn sphereflake(level: u32) -> SceneFile {
             ("ground".into(), material([0.45, 0.45, 0.5], 0.0, 10.0, 0.0)),
         ]),
         blocks,
+        animation: None,
     }
 }
 
@@ -198,6 +200,7 @@ pub fn grid(count: u32, seed: u64) -> SceneFile {
             ("white".into(), material([0.8, 0.8, 0.8], 0.5, 60.0, 0.3)),
         ]),
         blocks,
+        animation: None,
     }
 }
 

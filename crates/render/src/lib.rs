@@ -25,6 +25,7 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod animate;
 pub mod bench;
 pub mod bsdf;
 pub mod camera;
@@ -38,6 +39,7 @@ mod flatten;
 pub mod format;
 pub mod frame;
 pub mod generate;
+pub mod keys;
 pub mod limits;
 pub mod lobes;
 mod locate;

@@ -84,37 +84,60 @@ pub fn write_atomic(
     Ok(())
 }
 
-/// The file a part of a render goes to: `path` with `.FFFF` (the frame,
-/// four digits or more) and `.tile-I-of-N` (tile `I` of `N`, 0-based)
-/// inserted before its extension, in that order: `out/img.exr` with frame
-/// 7 and tile 2 of 4 is `out/img.0007.tile-2-of-4.exr`; without either it
-/// is `path` itself. A name without an extension gets them at its end.
+/// The file of one part of a job: `path` with the frame number, four
+/// digits at least (`.0007`), and the tile (`.tile-2-of-4`) inserted before
+/// the extension: `out/walk.exr`, frame 7, tile 2 of 4 is
+/// `out/walk.0007.tile-2-of-4.exr`. Without either, `path` itself; without
+/// an extension the tags go at the end.
 ///
 /// ```
 /// use std::path::Path;
 /// use render::output::part_path;
-/// assert_eq!(part_path(Path::new("out/img.exr"), None, Some((2, 4))), Path::new("out/img.tile-2-of-4.exr"));
-/// assert_eq!(part_path(Path::new("img.exr"), Some(7), Some((0, 3))), Path::new("img.0007.tile-0-of-3.exr"));
-/// assert_eq!(part_path(Path::new("img"), None, Some((1, 2))), Path::new("img.tile-1-of-2"));
+/// assert_eq!(part_path(Path::new("out/walk.exr"), Some(7), None), Path::new("out/walk.0007.exr"));
+/// assert_eq!(part_path(Path::new("walk.exr"), Some(7), Some((2, 4))), Path::new("walk.0007.tile-2-of-4.exr"));
 /// ```
 pub fn part_path(path: &Path, frame: Option<u32>, tile: Option<(u32, u32)>) -> PathBuf {
-    let mut insert = String::new();
+    let mut tags = String::new();
     if let Some(k) = frame {
-        insert.push_str(&format!(".{k:04}"));
+        tags.push_str(&format!(".{k:04}"));
     }
     if let Some((i, n)) = tile {
-        insert.push_str(&format!(".tile-{i}-of-{n}"));
+        tags.push_str(&format!(".tile-{i}-of-{n}"));
     }
-    if insert.is_empty() {
+    let (Some(stem), false) = (path.file_stem(), tags.is_empty()) else {
         return path.to_path_buf();
+    };
+    // Built from the stem and extension as they are (not necessarily UTF-8).
+    let mut name = OsString::from(stem);
+    name.push(&tags);
+    if let Some(ext) = path.extension() {
+        name.push(".");
+        name.push(ext);
     }
-    let Some(name) = path.file_name() else { return path.to_path_buf() };
-    let name = Path::new(name);
-    let mut file: OsString = name.file_stem().unwrap_or(name.as_os_str()).to_os_string();
-    file.push(insert);
-    if let Some(ext) = name.extension() {
-        file.push(".");
-        file.push(ext);
+    path.with_file_name(name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn part_paths_insert_the_frame_and_tile_before_the_extension() {
+        for (path, frame, tile, want) in [
+            ("walk.exr", None, None, "walk.exr"),
+            ("walk.exr", Some(0), None, "walk.0000.exr"),
+            ("out/walk.exr", Some(7), None, "out/walk.0007.exr"),
+            ("walk.exr", Some(24), None, "walk.0024.exr"),
+            ("walk.exr", Some(12345), None, "walk.12345.exr"),
+            ("walk.exr", Some(u32::MAX), None, "walk.4294967295.exr"),
+            ("walk.exr", None, Some((2, 4)), "walk.tile-2-of-4.exr"),
+            ("walk.exr", Some(7), Some((0, 16)), "walk.0007.tile-0-of-16.exr"),
+            ("a.b/walk.v2.exr", Some(3), None, "a.b/walk.v2.0003.exr"),
+            ("walk", Some(3), None, "walk.0003"),
+            ("/tmp/.walk", Some(3), None, "/tmp/.walk.0003"),
+            ("walk.png", Some(3), None, "walk.0003.png"),
+        ] {
+            assert_eq!(part_path(Path::new(path), frame, tile), Path::new(want), "{path} {frame:?} {tile:?}");
+        }
     }
-    path.with_file_name(file)
 }
