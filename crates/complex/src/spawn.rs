@@ -194,8 +194,9 @@ impl Prepared {
 pub struct Spawner<'c> {
     solid: Option<SolidRef<'c>>,
     /// The solid of a placed block, moved into the world
-    /// ([`Complex::assemble`]), when `solid` is `None`.
-    placed: Option<Solid>,
+    /// ([`Complex::assemble`]), when `solid` is `None`: on the heap, so
+    /// that a flat complex's spawner stays as small as it was.
+    placed: Option<Box<Solid>>,
     point: Point3<f64>,
     /// The unit normal at `point`, when the caller knew it.
     normal: Option<Vector3<f64>>,
@@ -223,8 +224,12 @@ impl Spawner<'_> {
     #[inline(never)]
     fn origin(&mut self, direction: &Vector3<f64>) -> Point3<f64> {
         let point = self.point;
-        let placed = self.placed;
-        let Some(solid) = self.solid.or(placed.as_ref().map(SolidRef::from)) else { return point };
+        // Fields borrowed one by one: the placed solid is read in place.
+        let solid = match (self.solid, &self.placed) {
+            (Some(s), _) => s,
+            (None, Some(placed)) => SolidRef::from(&**placed),
+            (None, None) => return point,
+        };
         let normal = self.normal;
         let prepared = *self.prepared.get_or_insert_with(|| Prepared::at(solid, &point, normal.as_ref()));
         match prepared.and_then(|p| p.side(direction).map(|sigma| (p, sigma))) {
@@ -242,7 +247,7 @@ impl Complex {
     pub fn spawner(&self, surface: Surface, point: &Point3<f64>) -> Spawner<'_> {
         let solid = self.solid_ref(surface.block, surface.solid);
         let finite = point.iter().all(|c| c.is_finite());
-        let placed = self.placed_solid(surface.block, surface.solid).filter(|_| finite);
+        let placed = self.placed_solid(surface.block, surface.solid).filter(|_| finite).map(Box::new);
         Spawner {
             solid: solid.filter(|_| finite),
             placed,
@@ -263,7 +268,9 @@ impl Complex {
     /// side a direction leaves on; a zero or non-finite `normal` is ignored
     /// (the normal is computed).
     pub fn spawner_with_normal(&self, surface: Surface, point: &Point3<f64>, normal: &Vector3<f64>) -> Spawner<'_> {
-        Spawner { normal: Some(*normal), ..self.spawner(surface, point) }
+        let mut spawner = self.spawner(surface, point);
+        spawner.normal = Some(*normal);
+        spawner
     }
 }
 
