@@ -225,9 +225,8 @@ impl SceneFile {
 
     // `world_parts`, dropping the parsed document before it returns (the
     // complex is built after it).
-    fn into_world_parts(mut self) -> Result<WorldParts, SceneError> {
-        let entries = std::mem::take(&mut self.blocks);
-        self.world_parts_with(Some(entries))
+    fn into_world_parts(self) -> Result<WorldParts, SceneError> {
+        self.world_parts()
     }
 
     /// Resolves names, composes transforms and builds the complex.
@@ -238,10 +237,6 @@ impl SceneFile {
     // Everything of `to_world` but the complex: checks the camera, settings,
     // lights and materials and flattens the blocks.
     fn world_parts(&self) -> Result<WorldParts, SceneError> {
-        self.world_parts_with(None)
-    }
-
-    fn world_parts_with(&self, owned: Option<Vec<crate::format::Entry>>) -> Result<WorldParts, SceneError> {
         let camera = camera(&self.camera)?;
 
         let s = &self.settings;
@@ -357,10 +352,7 @@ impl SceneFile {
             textures: None,
         });
 
-        let (blocks, infos) = match owned {
-            Some(entries) => self.flattened_owned(entries, default_material)?,
-            None => self.flattened(default_material)?,
-        };
+        let (blocks, infos) = self.flattened(default_material)?;
         if blocks.is_empty() {
             return Err(SceneError::semantic("blocks", "the scene has no blocks"));
         }

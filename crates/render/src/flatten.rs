@@ -137,56 +137,6 @@ impl SceneFile {
     }
 }
 
-impl SceneFile {
-    /// EXPERIMENT: [`SceneFile::flattened`] with the runs owning their entries, dropped as converted.
-    pub(crate) fn flattened_owned(
-        &self,
-        entries: Vec<Entry>,
-        default_material: usize,
-    ) -> Result<(Vec<Block>, Vec<BlockInfo>), SceneError> {
-        use rayon::prelude::*;
-        const RUN: usize = 1024;
-        let textured: Vec<bool> = self.materials.values().map(MaterialSpec::is_textured).chain([false]).collect();
-        let flattener = |before| Flattener {
-            materials: &self.materials,
-            textured: &textured,
-            default_material,
-            before,
-            blocks: vec![],
-            infos: vec![],
-        };
-        let mut before = 0;
-        let mut runs: Vec<(usize, Vec<Entry>, usize)> = Vec::new();
-        let mut it = entries.into_iter();
-        loop {
-            let run: Vec<Entry> = it.by_ref().take(RUN).collect();
-            if run.is_empty() {
-                break;
-            }
-            let first = before;
-            before += run.iter().map(|e| block_count(e, 0)).sum::<usize>();
-            runs.push((runs.len() * RUN, run, first));
-        }
-        drop(it);
-        let runs: Vec<Result<Flattener<'_>, SceneError>> = runs
-            .into_par_iter()
-            .map(|(first, run, before)| {
-                let mut flat = flattener(before);
-                let r = flat.entries(&run, first, "blocks", &[]);
-                drop(run);
-                r.map(|()| flat)
-            })
-            .collect();
-        let (mut blocks, mut infos) = (Vec::with_capacity(before), Vec::with_capacity(before));
-        for run in runs {
-            let run = run?;
-            blocks.extend(run.blocks);
-            infos.extend(run.infos);
-        }
-        Ok((blocks, infos))
-    }
-}
-
 /// How many blocks flattening `e` yields if it is valid (an invalid entry
 /// stops flattening, so what it counts does not matter).
 fn block_count(e: &Entry, depth: usize) -> usize {
