@@ -216,6 +216,9 @@ struct BenchArgs {
     /// Renders per scene (loaded once): the render time is the fastest, the median is printed too.
     #[arg(long, value_name = "R", default_value_t = 1)]
     runs: u32,
+    /// After each row, the load time by stage (read, parse, flatten, build).
+    #[arg(long)]
+    stages: bool,
 }
 
 #[derive(clap::Args)]
@@ -674,7 +677,7 @@ fn export_pov(args: ExportPovArgs) -> Result<(), Error> {
 
 /// `komplex bench`: one table row per scene.
 fn bench(args: BenchArgs) -> Result<(), Error> {
-    let BenchArgs { scenes, size, run: RunArgs { threads, precision }, runs } = args;
+    let BenchArgs { scenes, size, run: RunArgs { threads, precision }, runs, stages } = args;
     if !(1..=1000).contains(&runs) {
         return Err(Error::Options(format!("--runs must be between 1 and 1000, got {runs}")));
     }
@@ -709,6 +712,17 @@ fn bench(args: BenchArgs) -> Result<(), Error> {
             m.median.as_secs_f64(),
             m.runs
         );
+        if stages {
+            let s = m.stages;
+            let secs = |d: std::time::Duration| d.as_secs_f64();
+            println!(
+                "  load stages s: read {:.3}, parse {:.3}, flatten {:.3}, build {:.3}",
+                secs(s.read),
+                secs(s.parse),
+                secs(s.flatten),
+                secs(s.build)
+            );
+        }
     }
     Ok(())
 }

@@ -193,3 +193,26 @@ fn compare_builds_tells_equal_images_from_different_ones() {
     }
     assert!(stdout.contains("images: 3 of 3 renders differ"), "{stdout}");
 }
+
+#[test]
+fn bench_stages_add_up_to_at_most_the_load() {
+    let dir = tempdir();
+    let (table, csg) = (scene("table.json"), scene("csg.json"));
+    let args = ["bench", table.to_str().unwrap(), csg.to_str().unwrap(), "--width", "8", "--height", "6"];
+    let out = komplex_ok(dir.path(), &[&args[..], &["--threads", "1", "--stages"]].concat());
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 5, "a row and its stages per scene: {text}");
+    for pair in lines[1..].chunks(2) {
+        let load: f64 = pair[0].split_whitespace().nth(2).unwrap().parse().unwrap();
+        let stages = pair[1].trim().strip_prefix("load stages s: ").unwrap_or_else(|| panic!("{text}"));
+        let names: Vec<&str> = stages.split(", ").map(|s| s.split(' ').next().unwrap()).collect();
+        assert_eq!(names, ["read", "parse", "flatten", "build"], "{text}");
+        let secs: Vec<f64> = stages.split(", ").map(|s| s.split(' ').nth(1).unwrap().parse().unwrap()).collect();
+        // The stages are timed inside the load; each is printed to a millisecond.
+        assert!(secs.iter().all(|s| *s >= 0.0) && secs.iter().sum::<f64>() <= load + 0.002, "{text}");
+    }
+    // Without the flag, the table as before.
+    let out = komplex_ok(dir.path(), &[&args[..], &["--threads", "1"]].concat());
+    assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 3);
+}

@@ -22,6 +22,7 @@ use std::time::{Duration, Instant};
 
 use complex::Precision;
 
+use crate::convert::LoadTimes;
 use crate::error::Error;
 
 /// What one benchmark run measured.
@@ -31,6 +32,8 @@ pub struct Measurement {
     pub blocks: usize,
     /// Reading, parsing and building the kernel (bounds, BVH).
     pub load: Duration,
+    /// The load by stage.
+    pub stages: LoadTimes,
     /// Image size.
     pub width: u32,
     /// Image size.
@@ -86,7 +89,7 @@ pub fn measure_runs(
     runs: u32,
 ) -> Result<Measurement, Error> {
     let start = Instant::now();
-    let mut world = crate::convert::load(path)?;
+    let (mut world, stages) = crate::convert::load_timed(path)?;
     let load = start.elapsed();
     world.complex.set_precision(precision);
     world.camera =
@@ -107,6 +110,7 @@ pub fn measure_runs(
     Ok(Measurement {
         blocks: world.complex.blocks().len(),
         load,
+        stages,
         width,
         height,
         primary: u64::from(width) * u64::from(height),

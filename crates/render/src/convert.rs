@@ -4,6 +4,7 @@
 //! column when the text is at hand.
 
 use std::path::Path;
+use std::time::{Duration, Instant};
 
 use complex::{Block, Complex, ComplexOptions};
 use quadric::nalgebra::{Point3, Vector3};
@@ -18,8 +19,58 @@ use crate::world::{BlockInfo, Light, Material, Model, Settings, Textures, Triple
 
 /// Reads and converts a scene file.
 pub fn load(path: &Path) -> Result<World, Error> {
+    load_timed(path).map(|(world, _)| world)
+}
+
+/// How long each stage of [`load`] took (`komplex bench --stages`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LoadTimes {
+    /// Reading the file and checking its encoding.
+    pub read: Duration,
+    /// Parsing the JSON into the scene file's types.
+    pub parse: Duration,
+    /// Checking the camera, settings, lights and materials and flattening
+    /// the blocks (their solids placed).
+    pub flatten: Duration,
+    /// Building the complex (boxes, BVH, packed solids, point grid) and
+    /// the world.
+    pub build: Duration,
+}
+
+/// A scene file's text at least this long is dropped once parsed (a large
+/// scene's text is as big as its blocks); an error found later is located
+/// in the file read again. Shorter texts are kept for that.
+const KEEP_TEXT_BELOW: usize = 16 << 20;
+
+/// [`load`], with the time each stage took.
+pub fn load_timed(path: &Path) -> Result<(World, LoadTimes), Error> {
+    load_keeping(path, KEEP_TEXT_BELOW)
+}
+
+/// [`load_timed`], keeping the text for errors if it is shorter than `keep_below` bytes.
+fn load_keeping(path: &Path, keep_below: usize) -> Result<(World, LoadTimes), Error> {
+    let mut times = LoadTimes::default();
+    let start = Instant::now();
     let text = read_text(path)?;
-    SceneFile::load_str(&text).map_err(|source| Error::Scene { file: path.to_path_buf(), source })
+    let scene_error = |source| Error::Scene { file: path.to_path_buf(), source };
+    times.read = start.elapsed();
+    let start = Instant::now();
+    let scene = SceneFile::from_json(&text).map_err(scene_error)?;
+    times.parse = start.elapsed();
+    let text = (text.len() < keep_below).then_some(text);
+    // Only an error reads the text again: a file changed since is located
+    // as it is now, an unreadable one not at all.
+    let located = |e: SceneError| match &text {
+        Some(text) => scene_error(e.located(text)),
+        None => scene_error(e.located(&std::fs::read_to_string(path).unwrap_or_default())),
+    };
+    let start = Instant::now();
+    let parts = scene.into_world_parts().map_err(located)?;
+    times.flatten = start.elapsed();
+    let start = Instant::now();
+    let world = parts.build().map_err(located)?;
+    times.build = start.elapsed();
+    Ok((world, times))
 }
 
 /// Reads a scene file's text; bad UTF-8 is a scene error with its place.
@@ -176,9 +227,14 @@ impl SceneFile {
         // of fresh pages (a 100,000-block scene's parsed entries are about
         // a fifth of the load's memory).
         let scene = Self::from_json(text)?;
-        let parts = scene.world_parts().map_err(|e| e.located(text))?;
-        drop(scene);
+        let parts = scene.into_world_parts().map_err(|e| e.located(text))?;
         parts.build().map_err(|e| e.located(text))
+    }
+
+    // `world_parts`, dropping the parsed document before it returns (the
+    // complex is built after it).
+    fn into_world_parts(self) -> Result<WorldParts, SceneError> {
+        self.world_parts()
     }
 
     /// Resolves names, composes transforms and builds the complex.
@@ -354,6 +410,23 @@ mod tests {
         let w = SceneFile::from_json(&text).unwrap().to_world().unwrap();
         assert_eq!(w.lights[0].diffuse, Vector3::repeat(0.5));
         assert_eq!(w.lights[0].specular, Vector3::new(1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn errors_are_located_alike_whether_the_text_is_kept_or_read_again() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.json");
+        let blocks = r#"{ "objects": [ { "sphere": {} } ] },
+                 { "objects": [ { "sphere": {} } ], "material": "nope" }"#;
+        std::fs::write(&path, format!("{{ {CAMERA},\n \"blocks\": [ {blocks} ] }}")).unwrap();
+        let kept = load_keeping(&path, usize::MAX).unwrap_err().to_string();
+        assert!(kept.contains("blocks[1].material, line 3, column 65"), "{kept}");
+        assert_eq!(load_keeping(&path, 0).unwrap_err().to_string(), kept);
+        // Valid, the same world either way.
+        std::fs::write(&path, format!(r#"{{ {CAMERA}, "blocks": [ {{ "objects": [ {{ "sphere": {{}} }} ] }} ] }}"#))
+            .unwrap();
+        let (a, b) = (load_keeping(&path, usize::MAX).unwrap().0, load_keeping(&path, 0).unwrap().0);
+        assert_eq!(a.blocks(), b.blocks());
     }
 
     #[test]

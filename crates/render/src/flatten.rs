@@ -301,7 +301,8 @@ impl Flattener<'_> {
         // Only a textured block keeps its frame: untextured scenes neither
         // store nor read one.
         let textured = |m: usize| self.textured.get(m).copied().unwrap_or(false);
-        let frame = (textured(material) || solid_materials.iter().any(|&m| textured(m))).then(|| placement.inverse());
+        let frame =
+            (textured(material) || solid_materials.iter().any(|&m| textured(m))).then(|| Box::new(placement.inverse()));
         self.infos.push(BlockInfo { material, solid_materials, path: here, frame });
         Ok(())
     }

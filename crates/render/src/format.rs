@@ -635,18 +635,39 @@ pub struct Entry {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub transparent: Option<bool>,
     /// The solids whose intersection is the block (blocks only).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "exact_some")]
     pub objects: Option<Vec<ObjectSpec>>,
     /// The group's name (groups only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub group: Option<String>,
     /// Nested blocks and groups (groups only).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "exact_some")]
     pub blocks: Option<Vec<Entry>>,
     /// Steps applied after the objects' own transforms (blocks) or after
     /// everything inside (groups).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "exact")]
     pub transform: Vec<Step>,
+}
+
+/// A list read into a buffer of its own length. serde grows a list as it
+/// reads it (4 places, then doubling): a block of one or three objects
+/// would keep room for four, one of six for eight, and its transform of
+/// two or three steps for four. Shrunk at once, the spare room is what the
+/// next values parsed take, and a 10⁶-block scene's parsed document is a
+/// third smaller (docs/benchmarks.md, "Load time and peak memory").
+fn exact<'de, D: serde::Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<Vec<T>, D::Error> {
+    let mut v = Vec::<T>::deserialize(d)?;
+    v.shrink_to_fit();
+    Ok(v)
+}
+
+/// [`exact`] for a list that may be `null` or left out.
+fn exact_some<'de, D: serde::Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<Option<Vec<T>>, D::Error> {
+    let mut v = Option::<Vec<T>>::deserialize(d)?;
+    if let Some(v) = &mut v {
+        v.shrink_to_fit();
+    }
+    Ok(v)
 }
 
 /// Options of a sphere; `{}` is the unit ball.
@@ -728,7 +749,7 @@ pub struct ObjectSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub halfspace: Option<[f64; 4]>,
     /// Steps placing the solid, applied in list order.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "exact")]
     pub transform: Vec<Step>,
     /// Whether to take the outside of the solid instead.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
@@ -823,5 +844,25 @@ mod tests {
         // A large scene holds one per solid; see the comment on `ObjectSpec`.
         assert!(std::mem::size_of::<ObjectSpec>() <= 120, "{}", std::mem::size_of::<ObjectSpec>());
         assert!(std::mem::size_of::<Step>() <= 32, "{}", std::mem::size_of::<Step>());
+        // One per block, kept with the world; see `BlockInfo::frame`.
+        assert!(std::mem::size_of::<crate::world::BlockInfo>() <= 64);
+    }
+
+    #[test]
+    fn lists_are_read_into_buffers_of_their_own_length() {
+        let steps = r#"[ { "translate": [1, 2, 3] }, { "scale": 2 }, { "rotate_x": 90 } ]"#;
+        let objects: String = (0..6).map(|_| format!(r#"{{ "sphere": {{}}, "transform": {steps} }},"#)).collect();
+        let json = format!(r#"{{ "objects": [ {} ], "transform": {steps} }}"#, objects.trim_end_matches(','));
+        let e: Entry = serde_json::from_str(&json).unwrap();
+        let objects = e.objects.unwrap();
+        assert_eq!((objects.len(), objects.capacity()), (6, 6));
+        assert_eq!((e.transform.len(), e.transform.capacity()), (3, 3));
+        assert!(objects.iter().all(|o| o.transform.capacity() == 3));
+        let group: Entry =
+            serde_json::from_str(&format!(r#"{{ "group": "g", "blocks": [ {json}, {json}, {json} ] }}"#)).unwrap();
+        assert_eq!(group.blocks.map(|b| b.capacity()), Some(3));
+        // `null` is still no list.
+        let e: Entry = serde_json::from_str(r#"{ "objects": null }"#).unwrap();
+        assert!(e.objects.is_none());
     }
 }

@@ -61,5 +61,5 @@ pub mod world;
 /// The kernel's precision modes: `quadric`'s type, re-exported (one type, documented there).
 #[doc(no_inline)]
 pub use complex::Precision;
-pub use convert::load;
+pub use convert::{load, load_timed, LoadTimes};
 pub use error::{nearest, Error, SceneError};

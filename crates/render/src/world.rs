@@ -223,8 +223,9 @@ pub struct BlockInfo {
     pub path: String,
     /// World to the block's own frame (the inverse of its transform and
     /// its groups'), where its textures are evaluated; only for blocks
-    /// with a textured material (docs/model.md §5.9).
-    pub frame: Option<Transform>,
+    /// with a textured material (docs/model.md §5.9). Boxed: inline, the
+    /// `None` of every untextured block would take 176 bytes.
+    pub frame: Option<Box<Transform>>,
 }
 
 /// A scene ready to render.
@@ -244,7 +245,7 @@ pub struct World {
     blocks: Vec<BlockInfo>,
     /// Per block, the material index of all its surfaces, or `u32::MAX`
     /// when its solids' materials differ (then `blocks` answers): four
-    /// bytes per block, where a `BlockInfo` is 56 and its solid list a heap
+    /// bytes per block, where a `BlockInfo` is 64 and its solid list a heap
     /// buffer of its own, so a shaded hit of a large scene reads one likely
     /// cached word. Built with the world (`materials` and `blocks` are
     /// read-only, so it stays true), not per frame: at 100,000 blocks a
@@ -303,6 +304,6 @@ impl World {
 
     /// World to the frame of a block with a textured material.
     pub fn frame(&self, block: complex::BlockId) -> Option<&Transform> {
-        self.blocks[block.index()].frame.as_ref()
+        self.blocks[block.index()].frame.as_deref()
     }
 }
