@@ -5,16 +5,16 @@
 
 use std::path::Path;
 
-use complex::{Block, Complex, ComplexOptions};
+use complex::{Complex, ComplexOptions};
 use quadric::nalgebra::{Point3, Vector3};
 
 use crate::camera::{Camera, CameraError, Projection};
 use crate::error::{Error, SceneError};
-use crate::flatten::{finite_triple, vec3};
+use crate::flatten::{finite_triple, vec3, Flattened, Member};
 use crate::format::{CameraSpec, ColourSpec, ProjectionSpec, SceneFile, TextureSpec, VeinSpec};
 use crate::limits::{MAX_BOUNCES, MAX_SPP};
 use crate::texture::{Bump, Texture};
-use crate::world::{BlockInfo, Light, Material, Model, Settings, Textures, Triple, World};
+use crate::world::{Light, Material, Model, Settings, Textures, Triple, World};
 
 /// Reads and converts a scene file.
 pub fn load(path: &Path) -> Result<World, Error> {
@@ -297,11 +297,11 @@ impl SceneFile {
             textures: None,
         });
 
-        let (blocks, infos) = self.flattened(default_material)?;
-        if blocks.is_empty() {
+        let flat = self.flattened(default_material)?;
+        if flat.top.len == 0 {
             return Err(SceneError::semantic("blocks", "the scene has no blocks"));
         }
-        Ok(WorldParts { camera, settings: s.clone(), lights, materials, blocks, infos })
+        Ok(WorldParts { camera, settings: s.clone(), lights, materials, flat })
     }
 }
 
@@ -311,16 +311,26 @@ struct WorldParts {
     settings: Settings,
     lights: Vec<Light>,
     materials: Vec<Material>,
-    blocks: Vec<Block>,
-    infos: Vec<BlockInfo>,
+    flat: Flattened,
 }
 
 impl WorldParts {
     // Builds the complex: the last step of `SceneFile::to_world`.
     fn build(self) -> Result<World, SceneError> {
-        let WorldParts { camera, settings, lights, materials, blocks, infos } = self;
-        let complex = Complex::new(blocks, ComplexOptions { epsilon: settings.epsilon, ..Default::default() })
-            .map_err(|e| SceneError::semantic("blocks", e.to_string()))?;
+        let WorldParts { camera, settings, lights, materials, flat } = self;
+        let options = ComplexOptions { epsilon: settings.epsilon, ..Default::default() };
+        let kernel = |e: complex::ComplexError| SceneError::semantic("blocks", e.to_string());
+        if flat.top.is_plain() {
+            // No instances: the blocks as they are, the path of every scene before definitions existed.
+            let blocks = flat.top.members.into_iter().filter_map(|m| match m {
+                Member::Block(b) => Some(b),
+                Member::Placed(_) => None,
+            });
+            let complex = Complex::new(blocks.collect(), options).map_err(kernel)?;
+            return Ok(World::new(camera, settings, lights, materials, complex, flat.top.infos));
+        }
+        let (blocks, infos) = flat.expanded();
+        let complex = Complex::new(blocks, options).map_err(kernel)?;
         Ok(World::new(camera, settings, lights, materials, complex, infos))
     }
 }

@@ -101,6 +101,7 @@ pub fn sphereflake(level: u32) -> SceneFile {
     }
     SceneFile {
         schema: None,
+        definitions: BTreeMap::new(),
         camera: camera([4.2, 4.4, 6.8], [-2.1, -1.7, -3.4], 45.0),
         settings: Settings { ambient: [0.1; 3], background: [0.08, 0.1, 0.16], max_depth: 4, ..Settings::default() },
         lights: vec![light([4.0, 6.0, 5.0], 0.6), light([-5.0, 5.0, 2.0], 0.35), light([1.0, 8.0, -4.0], 0.25)],
@@ -188,6 +189,7 @@ pub fn grid(count: u32, seed: u64) -> SceneFile {
     let s = f64::from(side);
     SceneFile {
         schema: None,
+        definitions: BTreeMap::new(),
         camera: camera([2.2 * s, 1.6 * s, 2.6 * s], [-1.7 * s, -1.1 * s, -2.1 * s], 50.0),
         settings: Settings { ambient: [0.15; 3], background: [0.05, 0.05, 0.08], max_depth: 2, ..Settings::default() },
         lights: vec![light([3.0 * s, 4.0 * s, 2.0 * s], 0.7), light([-s, 2.0 * s, 3.0 * s], 0.3)],
