@@ -772,3 +772,111 @@ fn bad_ray_files_exit_1_and_name_the_place() {
         &["-o/--output goes with --rays; one ray's report is printed"],
     );
 }
+
+/// A scene with these `definitions` (the inside of the object) and top `blocks`.
+fn with_definitions(definitions: &str, b: &str) -> String {
+    format!(r#"{{ {CAMERA}, "definitions": {{ {definitions} }}, "blocks": [ {b} ] }}"#)
+}
+
+const PIN: &str = r#""pin": { "blocks": [ { "name": "rod", "objects": [ { "sphere": {} } ] } ] }"#;
+
+#[test]
+fn definitions_that_place_themselves_name_the_cycle() {
+    let ball = r#"{ "objects": [ { "sphere": {} } ] }"#;
+    check(
+        &*with_definitions(&format!(r#""a": {{ "blocks": [ {ball}, {{ "instance": "a" }} ] }}"#), ball),
+        1,
+        &["definitions.a.blocks[1], line 1, column", "a definition places itself: definitions.a → definitions.a"],
+    );
+    // Through another definition, from inside a group, by a lattice.
+    let defs = r#""a": { "blocks": [ { "instance": "b" } ] },
+                  "b": { "blocks": [ { "group": "g", "blocks": [ { "lattice": "a", "pitch": [1, 0, 0], "count": [2, 1, 1] } ] } ] }"#;
+    check(
+        &*with_definitions(defs, ball),
+        1,
+        &[
+            "definitions.b.blocks[0].blocks[0], line 2, column",
+            "a definition places itself: definitions.a → definitions.b → definitions.a",
+        ],
+    );
+}
+
+#[test]
+fn instances_and_lattices_are_checked() {
+    check(
+        &*with_definitions(PIN, r#"{ "instance": "pni" }"#),
+        1,
+        &["blocks[0].instance, line 1, column", "unknown definition \"pni\" (did you mean \"pin\"?)"],
+    );
+    check(
+        &*with_definitions(PIN, r#"{ "lattice": "pin", "pitch": [1, 0, 0], "count": [3, 0, 1] }"#),
+        1,
+        &[
+            "blocks[0].count, line 1, column",
+            "lattice of \"pin\": count must be at least 1 on every axis, got [3, 0, 1]",
+        ],
+    );
+    check(
+        &*with_definitions(PIN, r#"{ "lattice": "pin", "pitch": [1e306, 0, 0], "count": [1000, 1, 1] }"#),
+        1,
+        &["blocks[0].pitch, line 1, column", "lattice of \"pin\": the pitch and pitch × (count − 1) must be finite"],
+    );
+    check(
+        &*with_definitions(PIN, r#"{ "lattice": "pin", "count": [10, 1, 1] }"#),
+        1,
+        &["blocks[0].pitch, line 1, column", "lattice of \"pin\" needs `pitch` and `count`"],
+    );
+    check(
+        &*with_definitions(PIN, r#"{ "instance": "pin", "count": [10, 1, 1] }"#),
+        1,
+        &[
+            "blocks[0].count, line 1, column",
+            "instance of \"pin\": `count` belongs on a lattice (`\"lattice\": \"pin\"`)",
+        ],
+    );
+    check(
+        &*with_definitions(PIN, r#"{ "instance": "pin", "material": "x" }"#),
+        1,
+        &["blocks[0].material, line 1, column", "instance of \"pin\": `material` does not belong on an instance"],
+    );
+    check(
+        &*with_definitions(PIN, r#"{ "instance": "pin", "lattice": "pin" }"#),
+        1,
+        &["blocks[0], line 1, column", "an entry has either `instance` or `lattice`, not both"],
+    );
+    check(
+        &*blocks(r#"{ "objects": [ { "sphere": {} } ], "pitch": [1, 0, 0] }"#),
+        1,
+        &[
+            "blocks[0].pitch, line 1, column",
+            "`pitch` belongs on a lattice (`\"lattice\": \"NAME\"`), not on a block or group",
+        ],
+    );
+    check(
+        &*with_definitions(r#""pin": { "blocks": [] }"#, r#"{ "objects": [ { "sphere": {} } ] }"#),
+        1,
+        &["definitions.pin, line 1, column", "definition \"pin\" has no blocks"],
+    );
+}
+
+#[test]
+fn a_lattice_beyond_the_block_ids_fails_at_once() {
+    // 70000 × 70000 elements of a one-block definition: 4.9e9 blocks. Refused
+    // from the numbers, before anything is allocated for them.
+    check(
+        &*with_definitions(PIN, r#"{ "lattice": "pin", "pitch": [1, 1, 0], "count": [70000, 70000, 1] }"#),
+        1,
+        &[
+            "blocks[0], line 1, column",
+            "lattice of \"pin\": the scene would have more than 4294967294 blocks (the most a block id can number): \
+             4900000000 elements of 1 block each",
+        ],
+    );
+    // The sum of entries each within the limit.
+    let half = r#"{ "lattice": "pin", "pitch": [1, 1, 0], "count": [65536, 32768, 1] }"#;
+    check(
+        &*with_definitions(PIN, &format!("{half}, {half}")),
+        1,
+        &["blocks[1], line 1, column", "more than 4294967294 blocks"],
+    );
+}

@@ -535,10 +535,10 @@ impl Flattener<'_> {
         match total {
             Some(total) if total <= MAX_BLOCKS => self.flat.len += elements * len,
             _ => {
+                let each = if len == 1 { "1 block".to_string() } else { format!("{len} blocks") };
                 let msg = format!(
-                    "{kind} of \"{name}\": the scene would have more than {MAX_BLOCKS} blocks, \
-                     the most a block id can number ({} elements of {len} blocks here)",
-                    elements
+                    "{kind} of \"{name}\": the scene would have more than {MAX_BLOCKS} blocks \
+                     (the most a block id can number): {elements} elements of {each} each"
                 );
                 return Err(SceneError::semantic(here, msg));
             }
