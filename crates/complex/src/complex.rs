@@ -3,6 +3,7 @@
 use quadric::nalgebra::{Point3, Vector3};
 use quadric::{Bound, Interval, IntervalSet, Ray};
 
+use crate::assembly::{Assembly, Resolved, Visit};
 use crate::block::{Scratch, SolidRef, SpanBuf, Spans};
 use crate::bounds::block_boxes;
 use crate::bvh::{Bvh, RayBoxes, RayBoxes4};
@@ -28,6 +29,9 @@ pub struct ComplexOptions {
     /// [`quadric::Precision::Accurate`]); [`Complex::set_precision`] changes
     /// it later.
     pub precision: quadric::Precision,
+    /// A caller's number for this complex, which [`Complex::resolve`]
+    /// reports for the blocks of its own list (default 0).
+    pub key: u32,
 }
 
 /// What [`Complex::occluded_with`] remembers between rays: the block that
@@ -116,9 +120,24 @@ pub struct Complex {
     /// ([`Block::fits_interval_set`]): the queries then take the scratch
     /// with a heap buffer ([`SpanBuf`]), else the bare [`Spans`].
     large: bool,
-    /// Opaque blocks only, each fitting an interval set: the common case,
-    /// tested first.
+    /// Opaque blocks only, each fitting an interval set, no placements:
+    /// the common case, tested first.
     plain: bool,
+    /// Placed definitions ([`Complex::assemble`]); then `blocks` and the
+    /// structures over them are empty and the assembly holds the own blocks.
+    assembly: Option<Box<Assembly>>,
+    /// [`ComplexOptions::key`].
+    key: u32,
+}
+
+/// The default ε of a complex whose bounded part lies in `scene`.
+pub(crate) fn default_epsilon(scene: &Aabb) -> f64 {
+    let diagonal = if scene.is_bounded() { (scene.max - scene.min).norm() } else { 0.0 };
+    if diagonal > 0.0 && diagonal.is_finite() {
+        DEFAULT_RELATIVE_EPSILON * diagonal
+    } else {
+        DEFAULT_RELATIVE_EPSILON
+    }
 }
 
 impl Complex {
@@ -126,8 +145,8 @@ impl Complex {
     /// bounded ones. Blocks keep their order: earlier blocks have priority
     /// (docs/model.md §3.4).
     pub fn new(blocks: Vec<Block>, options: ComplexOptions) -> Result<Self, ComplexError> {
-        if blocks.len() >= u32::MAX as usize {
-            return Err(ComplexError::TooManyBlocks { max: u32::MAX as usize - 1 });
+        if blocks.len() as u64 > crate::assembly::MAX_BLOCKS {
+            return Err(ComplexError::TooManyBlocks { max: crate::assembly::MAX_BLOCKS as usize });
         }
         if let Some(e) = options.epsilon {
             if !(e.is_finite() && e >= 0.0) {
@@ -146,15 +165,9 @@ impl Complex {
                 unbounded.push(i as u32);
             }
         }
-        let epsilon = options.epsilon.unwrap_or_else(|| {
-            let scene = bounded.iter().fold(Aabb::EMPTY, |a, (_, b)| a.union(b));
-            let diagonal = if scene.is_bounded() { (scene.max - scene.min).norm() } else { 0.0 };
-            if diagonal > 0.0 && diagonal.is_finite() {
-                DEFAULT_RELATIVE_EPSILON * diagonal
-            } else {
-                DEFAULT_RELATIVE_EPSILON
-            }
-        });
+        let epsilon = options
+            .epsilon
+            .unwrap_or_else(|| default_epsilon(&bounded.iter().fold(Aabb::EMPTY, |a, (_, b)| a.union(b))));
         let bvh = Bvh::build(&bounded);
         let points = PointGrid::new(&bounded);
         let kernel = Kernel::new(bvh.items(), &blocks, &balls);
@@ -176,6 +189,8 @@ impl Complex {
             any_transparent,
             large,
             plain: !any_transparent && !large,
+            assembly: None,
+            key: options.key,
         };
         if options.precision != quadric::Precision::default() {
             complex.set_precision(options.precision);
@@ -197,19 +212,132 @@ impl Complex {
         for b in &mut self.blocks {
             b.set_precision(precision);
         }
+        if let Some(a) = &mut self.assembly {
+            a.set_precision(precision);
+        }
     }
 
-    /// The blocks in priority order.
+    /// Makes this (empty) complex the assembly `a` ([`Complex::assemble`]).
+    pub(crate) fn set_assembly(&mut self, a: Assembly, any_transparent: bool, large: bool) {
+        self.any_transparent = any_transparent;
+        self.large = large;
+        self.plain = false;
+        self.assembly = Some(Box::new(a));
+    }
+
+    /// The blocks of the complex's own list in priority order: all its
+    /// blocks, unless it was assembled with placed definitions
+    /// ([`Complex::assemble`]), whose blocks are found by
+    /// [`Complex::block`] and [`Complex::resolve`].
     pub fn blocks(&self) -> &[Block] {
-        &self.blocks
+        match &self.assembly {
+            None => &self.blocks,
+            Some(a) => a.own().blocks(),
+        }
     }
 
-    /// The block with this id.
+    /// The number of blocks, placed definitions expanded: ids run from 0
+    /// to `len() - 1`.
+    pub fn len(&self) -> usize {
+        match &self.assembly {
+            None => self.blocks.len(),
+            Some(a) => a.len(),
+        }
+    }
+
+    /// Whether the complex has no blocks.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Whether definitions are placed in it ([`Complex::assemble`]).
+    pub fn is_assembled(&self) -> bool {
+        self.assembly.is_some()
+    }
+
+    /// The block with this id, in the frame of the complex that lists it
+    /// (the world for the blocks of [`Complex::blocks`]; a definition's
+    /// frame for a placed one: [`Complex::resolve`] says where it is).
     ///
     /// # Panics
     /// If `id` is not a block of this complex.
+    #[inline]
     pub fn block(&self, id: BlockId) -> &Block {
-        &self.blocks[id.index()]
+        match &self.assembly {
+            None => &self.blocks[id.index()],
+            Some(a) => a.block(id.0),
+        }
+    }
+
+    /// Where block `id` comes from: the complex listing it (by its
+    /// [`ComplexOptions::key`]), its place among that complex's own blocks,
+    /// and the transform from that complex's frame to this one's.
+    ///
+    /// # Panics
+    /// If `id` is not a block of this complex.
+    pub fn resolve(&self, id: BlockId) -> Resolved<'_> {
+        match &self.assembly {
+            None => Resolved { key: self.key, own: id.0, block: &self.blocks[id.index()], to_world: None },
+            Some(a) => a.resolve(id.0),
+        }
+    }
+
+    pub(crate) fn is_large(&self) -> bool {
+        self.large
+    }
+
+    /// Every block whose box the ray crosses within `[from, *t_max]`, with
+    /// its intervals clipped to its box (before the ε rule) and `t` in this
+    /// complex's frame; `visit` may lower `*t_max`. The walk of placed
+    /// definitions, which ask their definitions through it.
+    pub(crate) fn walk_spans(&self, ray: &Ray, from: f64, t_max: &mut f64, visit: &mut Visit) {
+        match &self.assembly {
+            Some(a) => a.walk(ray, from, t_max, visit),
+            None if self.large => self.walk_flat::<SpanBuf>(ray, from, t_max, visit),
+            None => self.walk_flat::<Spans>(ray, from, t_max, visit),
+        }
+    }
+
+    fn walk_flat<S: Scratch>(&self, ray: &Ray, from: f64, t_max: &mut f64, visit: &mut Visit) {
+        let rb = RayBoxes::new(ray);
+        let mut scratch = S::new();
+        for i in self.unbounded_crossed(&rb, from, *t_max) {
+            visit(i, self.block_spans(i, ray, &rb, &mut scratch), t_max);
+        }
+        self.bvh.traverse(&rb, from, t_max, |k, _, t_max| {
+            visit(self.kernel.block(k), self.slot_spans(k, ray, &rb, &mut scratch), t_max)
+        });
+    }
+
+    /// Calls `f` with every block containing `p`, in no particular order.
+    pub(crate) fn for_each_containing(&self, p: &Point3<f64>, f: &mut dyn FnMut(u32, &Block)) {
+        if let Some(a) = &self.assembly {
+            return a.for_each_containing(p, f);
+        }
+        let others = self.points.wide_blocks().iter().chain(&self.unbounded);
+        for &i in self.points.cell_blocks(p).iter().chain(others) {
+            let b = &self.blocks[i as usize];
+            if self.boxes[i as usize].contains_point(p) && b.contains_point(p) {
+                f(i, b);
+            }
+        }
+    }
+
+    /// [`Complex::block_intervals_into`] by raw id, for the assembly.
+    pub(crate) fn block_spans_into(&self, id: u32, ray: &Ray, out: &mut Vec<Interval>) {
+        match &self.assembly {
+            Some(a) => a.block_spans_into(id, ray, out),
+            None => self.block_intervals_into(BlockId(id), ray, out),
+        }
+    }
+
+    /// The visits of a query's walk to placed definitions: nothing for a
+    /// flat complex.
+    #[inline(always)]
+    fn walk_placed(&self, ray: &Ray, from: f64, t_max: &mut f64, visit: &mut Visit) {
+        if let Some(a) = &self.assembly {
+            a.walk(ray, from, t_max, visit);
+        }
     }
 
     /// The fault-tolerance ε in use.
@@ -225,6 +353,9 @@ impl Complex {
     /// Solid `solid` of block `id`: the packed copy if the block has one,
     /// else the block's own; `None` if either index is out of range.
     pub(crate) fn solid_ref(&self, id: BlockId, solid: u32) -> Option<SolidRef<'_>> {
+        if self.assembly.is_some() {
+            return None;
+        }
         let slot = self.slot_of.get(id.index()).filter(|&&k| k != u32::MAX);
         let packed = slot.and_then(|&k| self.kernel.solid(k, solid));
         packed.or_else(|| self.blocks.get(id.index())?.solids().get(solid as usize).map(SolidRef::from))
@@ -234,12 +365,30 @@ impl Complex {
     /// block), tight for bounded blocks, infinite on the axes where the block
     /// is unbounded, [`Aabb::EMPTY`] for a block shown to be empty.
     pub fn block_aabb(&self, id: BlockId) -> Aabb {
-        self.boxes[id.index()]
+        match &self.assembly {
+            None => self.boxes[id.index()],
+            Some(a) => a.block_aabb(id.0),
+        }
     }
 
     /// The box of the whole complex.
     pub fn aabb(&self) -> Aabb {
-        self.boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b))
+        match &self.assembly {
+            None => self.boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b)),
+            Some(a) => a.aabb(),
+        }
+    }
+
+    /// The box of the bounded blocks.
+    pub(crate) fn bounded_aabb(&self) -> Aabb {
+        self.boxes.iter().filter(|b| b.is_bounded()).fold(Aabb::EMPTY, |a, b| a.union(b))
+    }
+
+    /// The solid `solid` of block `id` in this complex's frame, for a
+    /// placed block (`None` for the others, whose own solids are in this
+    /// frame, or an index out of range).
+    pub(crate) fn placed_solid(&self, id: BlockId, solid: u32) -> Option<quadric::Solid> {
+        self.assembly.as_ref()?.world_solid(id.0, solid)
     }
 
     /// The interval set of one block along the ray as every query sees it,
@@ -258,6 +407,14 @@ impl Complex {
     /// [`Block::fits_interval_set`]); [`Complex::block_intervals_into`]
     /// takes any block.
     pub fn block_intervals(&self, id: BlockId, ray: &Ray) -> IntervalSet {
+        if let Some(a) = &self.assembly {
+            let mut out = Vec::new();
+            a.block_spans_into(id.0, ray, &mut out);
+            return match IntervalSet::from_intervals(out.iter().copied()) {
+                Ok(set) => set,
+                Err(e) => panic!("block \"{}\": {e}; use Complex::block_intervals_into", self.block(id).name()),
+            };
+        }
         let mut scratch = <SpanBuf as Scratch>::new();
         self.block_intervals_in(id, ray, &mut scratch);
         match scratch.set() {
@@ -270,6 +427,9 @@ impl Complex {
     /// `out` (cleared first): for a block of any size, allocating only if
     /// `out` must grow.
     pub fn block_intervals_into(&self, id: BlockId, ray: &Ray, out: &mut Vec<Interval>) {
+        if let Some(a) = &self.assembly {
+            return a.block_spans_into(id.0, ray, out);
+        }
         let mut scratch = <SpanBuf as Scratch>::new();
         self.block_intervals_in(id, ray, &mut scratch);
         out.clear();
@@ -380,11 +540,9 @@ impl Complex {
         self.collect_spans(ray, f64::INFINITY, &mut out);
         match out.to_vec() {
             Ok(sets) => sets,
-            Err(id) => panic!(
-                "block \"{}\": {}; use Complex::intervals_into",
-                self.blocks[id.index()].name(),
-                quadric::CapacityError
-            ),
+            Err(id) => {
+                panic!("block \"{}\": {}; use Complex::intervals_into", self.block(id).name(), quadric::CapacityError)
+            }
         }
     }
 
@@ -429,6 +587,7 @@ impl Complex {
         for i in self.unbounded_crossed(&rb, from, max_t) {
             push(i, self.block_spans(i, ray, &rb, &mut scratch));
         }
+        self.walk_placed(ray, from, &mut t_max, &mut |i, spans, _| push(i, spans));
         out.sort();
     }
 
@@ -489,6 +648,10 @@ impl Complex {
                 None => push(i, self.slot_spans(k, ray, &rb, &mut scratch), t_max),
             }
         });
+        self.walk_placed(ray, 0.0, &mut t_max, &mut |i, spans, t_max| match known(i) {
+            Some(ivs) => push(i, ivs, t_max),
+            None => push(i, spans, t_max),
+        });
         out.sort();
         t_max
     }
@@ -508,6 +671,13 @@ impl Complex {
             return None;
         }
         let (mut opaque, mut transparent) = (u32::MAX, u32::MAX);
+        if let Some(a) = &self.assembly {
+            a.for_each_containing(p, &mut |i, b| {
+                let best = if b.is_transparent() { &mut transparent } else { &mut opaque };
+                *best = (*best).min(i);
+            });
+            return [opaque, transparent].into_iter().find(|&i| i != u32::MAX).map(BlockId);
+        }
         // The cell's blocks come in ascending order: the first opaque one
         // holding `p` owns it, whatever follows.
         for &i in self.points.cell_blocks(p) {
@@ -565,6 +735,11 @@ impl Complex {
         if !p.iter().all(|c| c.is_finite()) {
             return;
         }
+        if let Some(a) = &self.assembly {
+            a.for_each_containing(p, &mut |i, _| out.push(BlockId(i)));
+            out.sort_unstable();
+            return;
+        }
         let holds = |i: u32| self.boxes[i as usize].contains_point(p) && self.blocks[i as usize].contains_point(p);
         out.extend(self.points.cell_blocks(p).iter().copied().filter(|&i| holds(i)).map(BlockId));
         let cell = out.len();
@@ -580,7 +755,7 @@ impl Complex {
     /// there. Events between two opaque blocks (inside opaque matter) and
     /// between two transparent blocks of the same material are not.
     pub fn is_visible(&self, event: &Event) -> bool {
-        let opaque = |o: Option<BlockId>| o.is_some_and(|id| !self.blocks[id.index()].is_transparent());
+        let opaque = |o: Option<BlockId>| o.is_some_and(|id| !self.block(id).is_transparent());
         let inside_opaque = opaque(event.before) && opaque(event.after);
         !(event.same_medium || inside_opaque)
     }
@@ -699,6 +874,9 @@ impl Complex {
                 stopper = Some(k);
             }
         });
+        self.walk_placed(ray, eps, &mut t_max, &mut |_, spans, t_max| {
+            look(spans, t_max);
+        });
         // Keep the hint while it stops the rays, else the block that did.
         occluder.slot = if hint_stops { tried } else { stopper };
         if run_end > eps {
@@ -736,7 +914,7 @@ impl Complex {
     fn owner_after<S: Scratch>(&self, ray: &Ray, rb: &RayBoxes, t: f64) -> Option<BlockId> {
         let (mut opaque, mut transparent) = (u32::MAX, u32::MAX);
         let mut consider = |i: u32, spans: &[Interval]| {
-            let best = if self.blocks[i as usize].is_transparent() { &mut transparent } else { &mut opaque };
+            let best = if self.block(BlockId(i)).is_transparent() { &mut transparent } else { &mut opaque };
             if i < *best && spans.iter().any(|iv| iv.enter.t <= t && t < iv.exit.t) {
                 *best = i;
             }
@@ -749,6 +927,7 @@ impl Complex {
         for i in self.unbounded_crossed(rb, t, t) {
             consider(i, self.block_spans(i, ray, rb, &mut scratch));
         }
+        self.walk_placed(ray, t, &mut t_hi, &mut |i, spans, _| consider(i, spans));
         [opaque, transparent].into_iter().find(|&i| i != u32::MAX).map(BlockId)
     }
 
@@ -772,6 +951,7 @@ impl Complex {
         }
         self.bvh
             .traverse(rb, tau, &mut t_max, |k, _, t_max| consider(self.slot_spans(k, ray, rb, &mut scratch), t_max));
+        self.walk_placed(ray, tau, &mut t_max, &mut |_, spans, t_max| consider(spans, t_max));
         best
     }
 
@@ -779,7 +959,7 @@ impl Complex {
     /// (see [`Complex::is_visible`]).
     fn visible_change(&self, before: Option<BlockId>, after: Option<BlockId>) -> bool {
         let (Some(b), Some(a)) = (before, after) else { return true };
-        let (b, a) = (&self.blocks[b.index()], &self.blocks[a.index()]);
+        let (b, a) = (self.block(b), self.block(a));
         match (b.is_transparent(), a.is_transparent()) {
             (false, false) => false,
             (true, true) => b.material() != a.material(),
@@ -797,6 +977,9 @@ impl Complex {
         before: Option<BlockId>,
         after: Option<BlockId>,
     ) -> Option<Hit> {
+        if self.assembly.is_some() {
+            return self.placed_event_hit(ray, t, before, after);
+        }
         let entry = after.and_then(|id| {
             let mut scratch = S::new();
             let spans = self.block_spans(id.0, ray, rb, &mut scratch);
@@ -810,6 +993,23 @@ impl Complex {
             let solid = spans.iter().find(|iv| iv.exit.t == t)?.exit.solid()?;
             Some(self.hit(ray, t, id.0, solid, false))
         })
+    }
+
+    /// [`Complex::event_hit`] in an assembly: the block's spans from a walk
+    /// probing the boxes that hold the ray at `t`.
+    fn placed_event_hit(&self, ray: &Ray, t: f64, before: Option<BlockId>, after: Option<BlockId>) -> Option<Hit> {
+        let end = |id: BlockId, entering: bool| {
+            let mut solid = None;
+            let mut t_hi = t;
+            self.walk_placed(ray, t, &mut t_hi, &mut |i, spans, _| {
+                if i == id.0 {
+                    let end = spans.iter().map(|iv| if entering { iv.enter } else { iv.exit }).find(|b| b.t == t);
+                    solid = solid.or(end.and_then(|b| b.solid()));
+                }
+            });
+            solid.map(|solid| self.hit(ray, t, id.0, solid, entering))
+        };
+        after.and_then(|id| end(id, true)).or_else(|| end(before?, false))
     }
 
     /// `cast_ray` for complexes of opaque blocks only.
@@ -831,6 +1031,7 @@ impl Complex {
         self.bvh.traverse(&rb, eps, &mut t_max, |k, _, t_max| {
             nearest.consider(self.kernel.block(k), Some(k), self.slot_spans(k, ray, &rb, &mut scratch), t_max)
         });
+        self.walk_placed(ray, eps, &mut t_max, &mut |i, spans, t_max| nearest.consider(i, None, spans, t_max));
         self.nearest_hit::<S>(ray, &rb, &nearest, max_t)
     }
 
@@ -912,6 +1113,7 @@ impl Complex {
             for i in self.unbounded_crossed(rb, self.epsilon, run_end) {
                 extend(i, self.block_spans(i, ray, rb, &mut scratch));
             }
+            self.walk_placed(ray, self.epsilon, &mut t_hi, &mut |i, spans, _| extend(i, spans));
             if next > run_end {
                 if next > max_t {
                     return None;
@@ -937,6 +1139,12 @@ impl Complex {
     /// the surface ([`quadric::Solid::hit_point`]) except in
     /// [`quadric::Precision::Fast`], where it is `ray.at(t)`.
     pub(crate) fn hit_point(&self, ray: &Ray, t: f64, block: BlockId, solid: u32) -> Point3<f64> {
+        if self.assembly.is_some() {
+            return match self.placed_solid(block, solid) {
+                Some(s) => self.refined(ray, t, |t| s.hit_point(ray, t)),
+                None => ray.at(t),
+            };
+        }
         match self.blocks[block.index()].solids().get(solid as usize) {
             Some(s) => self.refined(ray, t, |t| s.hit_point(ray, t)),
             None => ray.at(t),
@@ -953,6 +1161,9 @@ impl Complex {
     }
 
     pub(crate) fn normal(&self, block: BlockId, solid: u32, point: &Point3<f64>) -> Vector3<f64> {
+        if self.assembly.is_some() {
+            return self.placed_solid(block, solid).and_then(|s| s.normal(point)).unwrap_or_else(Vector3::zeros);
+        }
         self.blocks[block.index()]
             .solids()
             .get(solid as usize)

@@ -26,6 +26,14 @@ pub enum ComplexError {
         /// The limit.
         max: usize,
     },
+    /// A placement that cannot be assembled ([`crate::Complex::assemble`]).
+    #[error("member {index}: {what}")]
+    BadPlacement {
+        /// Its place in the member list (0-based).
+        index: usize,
+        /// What is wrong.
+        what: String,
+    },
     /// A batch query given an output slice of another length than its input.
     #[error("a batch of {queries} queries needs {queries} answer slots, got {answers}")]
     LengthMismatch {

@@ -13,6 +13,7 @@
 //! keeps queries fast for large scenes. See `docs/complex.md`.
 #![deny(missing_docs)]
 
+mod assembly;
 mod batch;
 mod block;
 mod bounds;
@@ -26,6 +27,7 @@ pub mod shapes;
 mod spawn;
 mod volume;
 
+pub use assembly::{Member, Placement, Resolved};
 pub use batch::Traces;
 pub use block::{Block, BlockId, MaterialKey, Opacity};
 pub use bounds::Aabb;

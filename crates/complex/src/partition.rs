@@ -467,7 +467,7 @@ impl Complex {
             && cuts.windows(2).any(|w| w[1] - w[0] <= crate::block::NEAR_TIE * w[1].abs())
         {
             let mut moved = spans.to_lists();
-            if crate::block::settle_block_ties(ray, self.blocks(), &mut moved) {
+            if crate::block::settle_block_ties(ray, if self.is_assembled() { &[] } else { self.blocks() }, &mut moved) {
                 spans.assign(&moved);
                 gather(spans, cuts);
             }

@@ -81,7 +81,8 @@ impl Complex {
         point: &Point3<f64>,
         direction: &Vector3<f64>,
     ) -> Result<Ray, GeometryError> {
-        let solid = self.solid_ref(surface.block, surface.solid);
+        let placed = self.placed_solid(surface.block, surface.solid);
+        let solid = self.solid_ref(surface.block, surface.solid).or(placed.as_ref().map(SolidRef::from));
         match solid {
             Some(s) if point.iter().all(|c| c.is_finite()) => Ray::new(origin_from(s, point, direction), *direction),
             _ => Ray::new(*point, *direction),
@@ -192,6 +193,9 @@ impl Prepared {
 #[derive(Debug)]
 pub struct Spawner<'c> {
     solid: Option<SolidRef<'c>>,
+    /// The solid of a placed block, moved into the world
+    /// ([`Complex::assemble`]), when `solid` is `None`.
+    placed: Option<Solid>,
     point: Point3<f64>,
     /// The unit normal at `point`, when the caller knew it.
     normal: Option<Vector3<f64>>,
@@ -219,7 +223,8 @@ impl Spawner<'_> {
     #[inline(never)]
     fn origin(&mut self, direction: &Vector3<f64>) -> Point3<f64> {
         let point = self.point;
-        let Some(solid) = self.solid else { return point };
+        let placed = self.placed;
+        let Some(solid) = self.solid.or(placed.as_ref().map(SolidRef::from)) else { return point };
         let normal = self.normal;
         let prepared = *self.prepared.get_or_insert_with(|| Prepared::at(solid, &point, normal.as_ref()));
         match prepared.and_then(|p| p.side(direction).map(|sigma| (p, sigma))) {
@@ -237,7 +242,15 @@ impl Complex {
     pub fn spawner(&self, surface: Surface, point: &Point3<f64>) -> Spawner<'_> {
         let solid = self.solid_ref(surface.block, surface.solid);
         let finite = point.iter().all(|c| c.is_finite());
-        Spawner { solid: solid.filter(|_| finite), point: *point, normal: None, prepared: None, origins: [None; 2] }
+        let placed = self.placed_solid(surface.block, surface.solid).filter(|_| finite);
+        Spawner {
+            solid: solid.filter(|_| finite),
+            placed,
+            point: *point,
+            normal: None,
+            prepared: None,
+            origins: [None; 2],
+        }
     }
 
     /// [`Complex::spawner`] for a hit whose unit normal is known

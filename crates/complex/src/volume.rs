@@ -529,7 +529,7 @@ impl Complex {
     /// ```
     pub fn volumes(&self, options: &VolumeOptions) -> Result<Volumes, ComplexError> {
         options.check()?;
-        let n = self.blocks().len();
+        let n = self.len();
         let ids = || (0..n).map(|i| BlockId(i as u32));
         let finite = |id: BlockId| self.block_aabb(id).is_empty() || self.block_aabb(id).is_bounded();
         let (bounds, clipped) = match options.bounds {
@@ -593,7 +593,7 @@ impl Complex {
     /// `sums[i]`, each block's owned into `sums[n + i]`, the union's into
     /// `sums[2n]`.
     fn scene_line(&self, ray: &Ray, lo: f64, hi: f64, s: &mut SceneLine, sums: &mut [f64]) {
-        let n = self.blocks().len();
+        let n = self.len();
         self.collect_spans(ray, f64::INFINITY, &mut s.spans);
         for (id, ivs) in s.spans.iter() {
             sums[id.index()] += ivs.iter().map(|iv| clipped(iv.enter.t, iv.exit.t, lo, hi)).sum::<f64>();
@@ -702,7 +702,7 @@ impl Complex {
         include: impl Fn(BlockId, BlockId) -> bool,
     ) -> Vec<(BlockId, BlockId, Aabb)> {
         let clip = bounds.unwrap_or(Aabb::INFINITE);
-        let mut boxes: Vec<(u32, Aabb)> = (0..self.blocks().len() as u32)
+        let mut boxes: Vec<(u32, Aabb)> = (0..self.len() as u32)
             .map(|i| (i, self.block_aabb(BlockId(i)).intersection(&clip)))
             .filter(|(_, b)| (0..3).all(|k| b.min[k] < b.max[k]))
             .collect();

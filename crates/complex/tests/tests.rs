@@ -1,6 +1,7 @@
 //! The complex crate's one integration-test binary (see `Cargo.toml`).
 
 mod alloc;
+mod assembly;
 mod batch;
 mod bounds;
 mod common;
