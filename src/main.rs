@@ -535,7 +535,7 @@ fn export_pov(args: ExportPovArgs) -> Result<(), Error> {
     }
     let mut world = render::load(&scene)?;
     size.apply(&mut world)?;
-    let text = render::pov::export(&world, render::pov::PovOptions { mask });
+    let text = render::pov::export(&world, render::pov::PovOptions { mask })?;
     write_text(output.as_deref(), &text)
 }
 

@@ -107,6 +107,8 @@ pub(crate) struct Placed {
     pub pitch: Vector3<f64>,
     /// Elements along x, y and z (`[1, 1, 1]` for an instance).
     pub count: [u32; 3],
+    /// The entry's JSON path, for an error the kernel finds.
+    pub place: String,
 }
 
 /// A block list flattened: its members in document order, the infos of its
@@ -130,6 +132,10 @@ impl Flat {
 /// them in a `u32` whose largest value stands for none.
 pub(crate) const MAX_BLOCKS: u64 = u32::MAX as u64 - 1;
 
+/// The most elements of a lattice placed one by one (a lattice with a pitch
+/// <= 0 on an axis of several elements).
+pub(crate) const MAX_ELEMENTS_PLACED_ONE_BY_ONE: u64 = 1 << 16;
+
 /// The flattened scene: the top list and every definition's.
 #[derive(Debug, Default)]
 pub(crate) struct Flattened {
@@ -139,15 +145,16 @@ pub(crate) struct Flattened {
     /// `order`, each after those it places.
     pub definitions: Vec<Flat>,
     /// The definitions' indices, each after every definition it places.
-    #[allow(dead_code)] // read once the kernel builds placed definitions (`Complex::assemble`)
     pub order: Vec<usize>,
 }
 
+#[cfg(test)]
 impl Flattened {
     /// The explicit expansion: every placed definition's blocks moved to
     /// each of its places, in document order, `i` fastest, then `j`, then
     /// `k`; each block's info with its frame composed. The blocks of a
-    /// placed definition keep their names and paths.
+    /// placed definition keep their names and paths. The oracle of the
+    /// world's placed blocks (`convert`'s tests).
     pub(crate) fn expanded(&self) -> (Vec<Block>, Vec<BlockInfo>) {
         let mut out = (vec![], vec![]);
         self.expand_into(&self.top, &Transform::identity(), &mut out);
@@ -544,7 +551,34 @@ impl Flattener<'_> {
             }
         }
         let transform = outer.iter().fold(own, |m, g| m.then(g));
-        self.flat.members.push(Member::Placed(Placed { definition, transform, pitch, count }));
+        let place = here.to_string();
+        if (0..3).all(|a| count[a] == 1 || pitch[a] > 0.0) {
+            self.flat.members.push(Member::Placed(Placed { definition, transform, pitch, count, place }));
+            return Ok(());
+        }
+        // The kernel walks a lattice's cells along increasing coordinates, so
+        // a lattice with a pitch <= 0 on an axis of several elements is
+        // placed element by element, in the same order.
+        if elements > MAX_ELEMENTS_PLACED_ONE_BY_ONE {
+            let msg = format!(
+                "lattice of \"{name}\": a lattice with a pitch <= 0 on an axis of several elements is placed \
+                 element by element, at most {MAX_ELEMENTS_PLACED_ONE_BY_ONE} elements, got {elements} \
+                 (a positive pitch and a mirroring transform place any number)"
+            );
+            return Err(SceneError::semantic(&format!("{here}.pitch"), msg));
+        }
+        for k in 0..count[2] {
+            for j in 0..count[1] {
+                for i in 0..count[0] {
+                    let offset = Vector3::new(f64::from(i) * pitch.x, f64::from(j) * pitch.y, f64::from(k) * pitch.z);
+                    // The offset is finite (the extent was checked above).
+                    let step = Transform::translate(offset).map_err(|e| SceneError::semantic(here, e.to_string()))?;
+                    let transform = step.then(&transform);
+                    let (pitch, count, place) = (Vector3::zeros(), [1, 1, 1], place.clone());
+                    self.flat.members.push(Member::Placed(Placed { definition, transform, pitch, count, place }));
+                }
+            }
+        }
         Ok(())
     }
 
@@ -810,14 +844,14 @@ mod tests {
         );
         let names: Vec<&str> = w.complex.blocks().iter().map(|b| b.name()).collect();
         assert_eq!(names, ["one", "two", "three", "block 4"]);
-        assert_eq!(w.blocks()[2].path, "blocks[1].blocks[1].blocks[0]");
+        assert_eq!(w.block_info(complex::BlockId(2)).path, "blocks[1].blocks[1].blocks[0]");
         let id = complex::BlockId(3);
         assert_eq!(w.surface_material(id, 0).name, "a");
         assert_eq!(w.surface_material(id, 1).name, "b");
         assert_eq!(w.block_material(id).name, "b");
         assert_eq!(w.block_material(complex::BlockId(1)).name, "(default)");
         // The table built with the world answers as the block infos do.
-        for (i, info) in w.blocks().iter().enumerate() {
+        for (i, (_, info)) in w.written_blocks().enumerate() {
             for j in 0..info.solid_materials.len() + 1 {
                 let m = info.solid_materials.get(j).copied().unwrap_or(info.material);
                 let got = w.surface_material(complex::BlockId(i as u32), j as u32);
