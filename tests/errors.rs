@@ -880,3 +880,49 @@ fn a_lattice_beyond_the_block_ids_fails_at_once() {
         &["blocks[1], line 1, column", "more than 4294967294 blocks"],
     );
 }
+
+#[test]
+fn lattices_the_kernel_cannot_walk_and_chains_too_deep_are_refused() {
+    // A pitch <= 0 is placed element by element, up to 65536 elements.
+    check(
+        &*with_definitions(PIN, r#"{ "lattice": "pin", "pitch": [-1, 0, 0], "count": [70000, 1, 1] }"#),
+        1,
+        &[
+            "blocks[0].pitch, line 1, column",
+            "lattice of \"pin\": a lattice with a pitch <= 0 on an axis of several elements is placed element by \
+             element, at most 65536 elements, got 70000",
+        ],
+    );
+    check(
+        &*with_definitions(
+            r#""floor": { "blocks": [ { "objects": [ { "halfspace": [0, 1, 0, 0] } ] } ] }"#,
+            r#"{ "lattice": "floor", "pitch": [1, 0, 0], "count": [2, 1, 1] }"#,
+        ),
+        1,
+        &["blocks[0], line 1, column", "a lattice's definition must be bounded"],
+    );
+    // d00 places d01, which places d02, ... d40: 41 levels.
+    let mut defs: Vec<String> =
+        (0..40).map(|i| format!(r#""d{i:02}": {{ "blocks": [ {{ "instance": "d{:02}" }} ] }}"#, i + 1)).collect();
+    defs.push(r#""d40": { "blocks": [ { "objects": [ { "sphere": {} } ] } ] }"#.into());
+    check(
+        &*with_definitions(&defs.join(", "), r#"{ "instance": "d00" }"#),
+        1,
+        &["definitions.d08.blocks[0], line 1, column", "definitions place each other deeper than 32 levels"],
+    );
+}
+
+#[test]
+fn commands_that_list_every_block_refuse_huge_expansions() {
+    let big = with_definitions(PIN, r#"{ "lattice": "pin", "pitch": [3, 3, 3], "count": [128, 128, 128] }"#);
+    let files: &[(&str, &[u8])] = &[("big.json", big.as_bytes())];
+    let many = "the scene has 2097152 blocks (instances and lattices expanded), more than the";
+    check_with(files, &["volume", "big.json"], 1, &["error: volume: ", many, "1048576 it measures one by one"]);
+    check_with(files, &["overlaps", "big.json"], 1, &["error: overlaps: ", many, "1048576 it measures one by one"]);
+    check_with(
+        files,
+        &["export-pov", "big.json", "-o", "out.pov"],
+        1,
+        &["error: export-pov: ", many, "65536 it writes out one by one"],
+    );
+}

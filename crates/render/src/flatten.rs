@@ -14,7 +14,7 @@ use quadric::{GeometryError, HalfSpace, Quadric, Solid, Transform};
 
 use crate::error::SceneError;
 use crate::format::{Axis, Entry, MaterialSpec, ObjectSpec, Scale, SceneFile, Step};
-use crate::limits::MAX_GROUP_DEPTH;
+use crate::limits::{MAX_DEFINITION_DEPTH, MAX_GROUP_DEPTH};
 use crate::world::{BlockInfo, Triple};
 
 /// A triple as a vector.
@@ -256,6 +256,17 @@ impl SceneFile {
                         ));
                     }
                     State::Done => {}
+                }
+            }
+        }
+        // Levels of placement below each definition, settled in `order`.
+        let mut depth = vec![0; names.len()];
+        for &d in &order {
+            for (t, place) in &refs[d] {
+                depth[d] = depth[d].max(depth[*t] + 1);
+                if depth[d] >= MAX_DEFINITION_DEPTH {
+                    let msg = format!("definitions place each other deeper than {MAX_DEFINITION_DEPTH} levels");
+                    return Err(SceneError::semantic(place, msg));
                 }
             }
         }
