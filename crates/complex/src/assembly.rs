@@ -1,5 +1,5 @@
 //! Placed definitions: a complex whose list holds, besides blocks,
-//! instances and lattices of other complexes (docs/model.md §3.9). Each
+//! instances and lattices of other complexes (docs/model.md §3.10). Each
 //! definition is built once in its own frame; a query moves the ray into
 //! that frame and asks the definition, so memory grows with the unique
 //! geometry and the number of placements, not with the expansion.
@@ -112,6 +112,14 @@ pub(crate) struct Assembly {
     points: PointGrid,
     len: u32,
     key: u32,
+}
+
+/// How a block is moved from its definition's frame to the world.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Placing {
+    Identity,
+    Translate(Vector3<f64>),
+    General(Transform),
 }
 
 /// The most blocks a complex numbers: ids are `u32`, and `u32::MAX` is kept
@@ -338,6 +346,12 @@ impl Part {
         let rb = RayBoxes::new(local);
         let lattice_max = b.max + self.offset([self.count[0] - 1, self.count[1] - 1, self.count[2] - 1]);
         let Some(t0) = rb.enter(&b.min.coords.into(), &lattice_max.coords.into(), from, *t_max) else { return };
+        let (_, t1) = rb.range(&b.min.coords.into(), &lattice_max.coords.into());
+        // The part of the ray a cell's candidates are taken from is grown
+        // by far more than the rounding of the slab tests, so every
+        // element whose (padded) box the ray enters in the cell is one.
+        let grown = |t: f64| 1e-9 * (1.0 + t.abs());
+        let (first, end) = (t0 - grown(t0), t1 + grown(t1));
         // Cells of one pitch from the element box's corner; element `i`
         // reaches cells `i ..= i + reach`. An axis of one element is one cell.
         let last = [0, 1, 2].map(|a| i64::from(self.count[a]) - 1 + self.reach[a]);
@@ -358,31 +372,48 @@ impl Part {
             }
         }
         let mut cell_start = f64::NEG_INFINITY;
+        // The previous cell's candidates: along a line, each axis's range
+        // slides one way, so the cells where an element is a candidate are
+        // consecutive, and it is visited in the first of them.
+        #[allow(clippy::reversed_empty_ranges)]
+        let mut previous = [1..=0, 1..=0, 1..=0];
         loop {
             let axis = (0..3).min_by(|&p, &q| next[p].total_cmp(&next[q])).unwrap_or(0);
             let step = if d[axis] > 0.0 { 1 } else { -1 };
-            let leaves = next[axis] == f64::INFINITY || !(0..=last[axis]).contains(&(cell[axis] + step));
+            // The last cell: the next one is out of the grid, or beyond the
+            // lattice's box.
+            let leaves =
+                next[axis] >= end || next[axis] == f64::INFINITY || !(0..=last[axis]).contains(&(cell[axis] + step));
             let cell_end = if leaves { f64::INFINITY } else { next[axis] };
-            // The elements this cell can hold, with one cell of slack for
-            // rounding; each is visited in the cell where the ray enters
-            // its box, so exactly once.
+            // The elements whose boxes meet the ray's stretch in this cell
+            // (grown for rounding), from its coordinates at both ends.
+            let (t_s, t_e) = (cell_start.max(first), cell_end.min(end).min(*t_max));
+            let (t_s, t_e) = (t_s - grown(t_s), t_e + grown(t_e));
             let range = |a: usize| {
                 if self.count[a] == 1 {
-                    0..=0
-                } else {
-                    let lo = (cell[a] - self.reach[a] - 1).max(0);
-                    let hi = (cell[a] + 1).min(i64::from(self.count[a]) - 1);
-                    lo..=hi
+                    return 0..=0;
                 }
+                let u = |t: f64| if d[a] == 0.0 { o[a] } else { o[a] + t * d[a] };
+                let (x0, x1) = (u(t_s), u(t_e));
+                // Element `i` meets `[x_lo, x_hi]` iff `x_lo - max ≤ i·p ≤ x_hi - min`.
+                let slack = 1e-6;
+                let lo = (x0.min(x1) - b.max[a]) / self.pitch[a] - slack;
+                let hi = (x0.max(x1) - b.min[a]) / self.pitch[a] + slack;
+                let (lo, hi) = ((lo.ceil() as i64).max(0), (hi.floor() as i64).min(i64::from(self.count[a]) - 1));
+                lo..=hi
             };
-            for k in range(2) {
-                for j in range(1) {
-                    for i in range(0) {
+            let ranges = [range(0), range(1), range(2)];
+            for k in ranges[2].clone() {
+                for j in ranges[1].clone() {
+                    let seen_jk = previous[2].contains(&k) && previous[1].contains(&j);
+                    for i in ranges[0].clone() {
+                        if seen_jk && previous[0].contains(&i) {
+                            continue;
+                        }
                         let index = [i as u32, j as u32, k as u32];
                         let offset = self.offset(index);
                         let (lo, hi) = ((b.min + offset).coords.into(), (b.max + offset).coords.into());
-                        let Some(enter) = rb.enter(&lo, &hi, from, *t_max) else { continue };
-                        if !(enter >= cell_start && enter < cell_end) {
+                        if rb.enter(&lo, &hi, from, *t_max).is_none() {
                             continue;
                         }
                         let Ok(element) = Ray::new_unit(o - offset, d) else { continue };
@@ -390,6 +421,7 @@ impl Part {
                     }
                 }
             }
+            previous = ranges;
             if leaves || cell_end > *t_max {
                 return;
             }
@@ -498,8 +530,14 @@ fn transformed_box(b: &Aabb, m: &Transform) -> Aabb {
 impl Assembly {
     /// Visits every block whose box the ray crosses within `[from, *t_max]`.
     pub(crate) fn walk(&self, ray: &Ray, from: f64, t_max: &mut f64, visit: &mut Visit) {
-        let own_ids = &self.own_ids;
-        self.own.walk_spans(ray, from, t_max, &mut |i, spans, t_max| visit(own_ids[i as usize], spans, t_max));
+        if !self.own_ids.is_empty() {
+            let own_ids = &self.own_ids;
+            self.own.walk_spans(ray, from, t_max, &mut |i, spans, t_max| visit(own_ids[i as usize], spans, t_max));
+        }
+        if let [part] = &self.parts[..] {
+            // One placement (a lattice, say): its walk tests its own box.
+            return part.walk(ray, from, t_max, visit);
+        }
         let rb = RayBoxes::new(ray);
         for &p in &self.unbounded {
             let b = &self.parts[p as usize].world_box;
@@ -601,12 +639,39 @@ impl Assembly {
     /// The solid `solid` of block `id`, placed in the world; `None` if
     /// either index is out of range.
     pub(crate) fn world_solid(&self, id: u32, solid: u32) -> Option<Solid> {
-        let r = self.resolve(id);
-        let s = r.block.solids().get(solid as usize)?;
-        Some(match &r.to_world {
-            Some(m) => s.transformed(m),
-            None => *s,
+        let (block, placing) = self.placing(id);
+        let s = block.solids().get(solid as usize)?;
+        Some(match placing {
+            Placing::Identity => *s,
+            Placing::Translate(v) => s.transformed(&Transform::translate(v).ok()?),
+            Placing::General(m) => s.transformed(&m),
         })
+    }
+
+    /// Block `id` and how it is placed: [`Assembly::resolve`]'s transform,
+    /// kept a translation (summed level by level) while every level is one.
+    pub(crate) fn placing(&self, id: u32) -> (&Block, Placing) {
+        match self.part_of(id) {
+            Err(own) => (&self.own.blocks()[own as usize], Placing::Identity),
+            Ok(p) => {
+                let rel = id - p.base;
+                let (block, inner) = p.definition.placing(rel % p.stride);
+                let e = rel / p.stride;
+                let outer = match (inner, p.translation_only) {
+                    (Placing::Identity, true) => Placing::Translate(p.offset(p.index(e)) + p.transform.translation()),
+                    (Placing::Translate(v), true) => {
+                        Placing::Translate(v + p.offset(p.index(e)) + p.transform.translation())
+                    }
+                    (Placing::Identity, false) => Placing::General(p.element_transform(e)),
+                    (Placing::Translate(v), false) => match Transform::translate(v) {
+                        Ok(t) => Placing::General(t.then(&p.element_transform(e))),
+                        Err(_) => Placing::General(p.element_transform(e)),
+                    },
+                    (Placing::General(m), _) => Placing::General(m.then(&p.element_transform(e))),
+                };
+                (block, outer)
+            }
+        }
     }
 
     /// The box of block `id` in the world.

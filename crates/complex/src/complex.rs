@@ -225,6 +225,14 @@ impl Complex {
         self.assembly = Some(Box::new(a));
     }
 
+    /// [`Assembly::placing`] of any complex: a flat one's blocks are in place.
+    pub(crate) fn placing(&self, id: u32) -> (&Block, crate::assembly::Placing) {
+        match &self.assembly {
+            None => (&self.blocks[id as usize], crate::assembly::Placing::Identity),
+            Some(a) => a.placing(id),
+        }
+    }
+
     /// The blocks of the complex's own list in priority order: all its
     /// blocks, unless it was assembled with placed definitions
     /// ([`Complex::assemble`]), whose blocks are found by
@@ -1077,10 +1085,7 @@ impl Complex {
                 let point = self.refined(ray, t, |t| q.hit_point(ray, t));
                 (point, q.normal(&point).unwrap_or_else(Vector3::zeros))
             }
-            None => {
-                let point = self.hit_point(ray, t, BlockId(block), solid);
-                (point, self.normal(BlockId(block), solid, &point))
-            }
+            None => return Some(self.hit(ray, t, block, solid, true)),
         };
         Some(Hit { t, point, normal, entering: true, block: BlockId(block), solid })
     }
@@ -1130,6 +1135,30 @@ impl Complex {
     }
 
     fn hit(&self, ray: &Ray, t: f64, block: u32, solid: u32, entering: bool) -> Hit {
+        if let Some(a) = &self.assembly {
+            let (b, placing) = a.placing(block);
+            let (point, normal) = match placing {
+                // Moved only: the point on the solid where it is defined,
+                // moved back (a translation keeps the normal).
+                crate::assembly::Placing::Translate(v) => {
+                    match (b.solids().get(solid as usize), Ray::new_unit(ray.origin() - v, ray.direction())) {
+                        (Some(s), Ok(local)) => {
+                            let point = self.refined(&local, t, |t| s.hit_point(&local, t));
+                            (point + v, s.normal(&point).unwrap_or_else(Vector3::zeros))
+                        }
+                        _ => (ray.at(t), Vector3::zeros()),
+                    }
+                }
+                _ => match a.world_solid(block, solid) {
+                    Some(s) => {
+                        let point = self.refined(ray, t, |t| s.hit_point(ray, t));
+                        (point, s.normal(&point).unwrap_or_else(Vector3::zeros))
+                    }
+                    None => (ray.at(t), Vector3::zeros()),
+                },
+            };
+            return Hit { t, point, normal, entering, block: BlockId(block), solid };
+        }
         let point = self.hit_point(ray, t, BlockId(block), solid);
         let normal = self.normal(BlockId(block), solid, &point);
         Hit { t, point, normal, entering, block: BlockId(block), solid }

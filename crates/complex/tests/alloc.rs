@@ -168,3 +168,51 @@ fn large_blocks_allocate_once_per_thread() {
     });
     assert_eq!(info.count_total, 0, "queries allocated after warm-up");
 }
+
+/// The scene placed as definitions: a translated 2 × 1 × 2 lattice of its
+/// balls and a rotated, scaled instance of all of it, with an own block
+/// between them.
+fn assembled(transparent_every: usize) -> (Complex, Vec<Ray>) {
+    use complex::{Member, Placement};
+    use quadric::nalgebra::Vector3;
+    use quadric::Transform;
+    let (definition, rays) = scene(transparent_every);
+    // A lattice's definition is bounded: the scene without its floor.
+    let balls = Complex::new(definition.blocks()[..300].to_vec(), ComplexOptions::default()).expect("valid");
+    let definition = std::sync::Arc::new(definition);
+    let lattice = Placement {
+        pitch: Vector3::new(3.0, 0.0, 3.0),
+        count: [2, 1, 2],
+        ..Placement::instance(
+            std::sync::Arc::new(balls),
+            Transform::translate(Vector3::new(-1.5, 0.0, -1.5)).expect("finite"),
+        )
+    };
+    let turn = Transform::scale(0.5).expect("finite").then(&Transform::rotate_y_degrees(30.0).expect("finite"));
+    let ball = Block::new("ball", vec![Solid::from(Quadric::sphere())], Opacity::Opaque, MaterialKey(1));
+    let members = vec![
+        Member::Placed(lattice),
+        Member::Block(ball.expect("valid")),
+        Member::Placed(Placement::instance(definition, turn)),
+    ];
+    (Complex::assemble(members, ComplexOptions::default()).expect("valid"), rays)
+}
+
+#[test]
+fn assembled_scenes_do_not_allocate() {
+    for transparent_every in [0, 4] {
+        let (c, rays) = assembled(transparent_every);
+        let mut n = 0;
+        let info = allocation_counter::measure(|| n = hits(&c, &rays));
+        assert!(n > 50, "the scene should be hit often, got {n}");
+        assert_eq!(info.count_total, 0, "cast_ray allocated (transparent every {transparent_every})");
+        let info = allocation_counter::measure(|| n = rays.iter().filter(|r| c.occluded(r, 8.0)).count());
+        assert_eq!(info.count_total, 0, "occluded allocated (transparent every {transparent_every})");
+        let info = allocation_counter::measure(|| {
+            for r in rays.chunks_exact(4) {
+                std::hint::black_box(c.cast_rays(&[r[0], r[1], r[2], r[3]], f64::INFINITY));
+            }
+        });
+        assert_eq!(info.count_total, 0, "cast_rays allocated (transparent every {transparent_every})");
+    }
+}
