@@ -235,7 +235,7 @@ pub fn nested_lattice(outer: u32, inner: u32) -> SceneFile {
     SceneFile {
         schema: None,
         definitions,
-        camera: camera([0.0, 14.0, side / 2.0 + 10.0], [0.0, -0.55, -1.0], 60.0),
+        camera: camera([0.0, 14.0, side / 2.0 + 10.0], [0.0, -0.3, -1.0], 60.0),
         settings: Settings { ambient: [0.15; 3], background: [0.35, 0.45, 0.6], max_depth: 2, ..Settings::default() },
         lights: vec![light([side / 4.0, 40.0, side / 2.0], 0.8)],
         materials: BTreeMap::from([
