@@ -243,3 +243,19 @@ fn same(a: &Value, b: &Value, at: &str) {
         _ => assert_eq!(a, b, "{at}"),
     }
 }
+
+#[test]
+fn a_billion_blocks_load_and_check_in_little_memory() {
+    // 1000 x 1000 tiles of 30 x 30 balls: 9e8 blocks, never expanded.
+    let dir = tempdir();
+    let scene = dir.path().join("lattice.json");
+    komplex_ok(dir.path(), &["generate", "lattice", "-o", scene.to_str().unwrap()]);
+    let out = String::from_utf8(komplex_ok(dir.path(), &["check", scene.to_str().unwrap()]).stdout).unwrap();
+    assert!(out.starts_with("900000001 blocks (0 transparent), 900000001 solids"), "{out}");
+    assert!(out.contains("overlaps between opaque blocks not checked: more than 1048576 blocks"), "{out}");
+    let world = crate::support::world(&scene, Some((16, 12)));
+    let frame = render_frame(&world);
+    // Balls have the ids 1 to 9e8 of the expansion, the ground the last.
+    assert!(frame.pixels().any(|p| (1..=900_000_000).contains(&p.block)));
+    assert!(frame.pixels().all(|p| p.block <= 900_000_001));
+}

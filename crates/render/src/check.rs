@@ -21,7 +21,8 @@ pub struct Report {
     pub lights: usize,
     /// Number of named materials.
     pub materials: usize,
-    /// Box of the bounded blocks, `None` if none is bounded.
+    /// Box of the bounded blocks, `None` if none is bounded; for more than
+    /// 2²⁰ blocks (instances expanded), the complex's box if it is bounded.
     pub bounds: Option<([f64; 3], [f64; 3])>,
     /// The fault tolerance ε in use.
     pub epsilon: f64,
@@ -81,8 +82,8 @@ pub fn check(world: &World) -> Report {
             }
         }
         warnings.push(format!(
-            "{} blocks: more than {MAX_BLOCKS_VISITED}, so the bounds are the complex's box and blocks are not \
-             checked one by one",
+            "{} blocks: more than {MAX_BLOCKS_VISITED}, so the bounds are the complex's box (unknown if it is \
+             unbounded) and blocks are not checked one by one",
             complex.len()
         ));
     }
@@ -104,7 +105,14 @@ pub fn check(world: &World) -> Report {
             }
         }
     }
-    opaque_overlaps(world, &mut warnings);
+    if complex.len() <= MAX_BLOCKS_VISITED {
+        opaque_overlaps(world, &mut warnings);
+    } else {
+        warnings.push(format!(
+            "overlaps between opaque blocks not checked: more than {MAX_BLOCKS_VISITED} blocks (run komplex overlaps \
+             on a part of the scene)"
+        ));
+    }
     // The path integrator is also lit by emissive blocks and the background.
     let path_lit = world.settings.integrator == Integrator::Path
         && (world.materials().iter().any(|m| m.emission.max() > 0.0)
@@ -198,7 +206,7 @@ impl fmt::Display for Report {
         )?;
         match self.bounds {
             Some((lo, hi)) => writeln!(f, "bounds: {lo:?} .. {hi:?}")?,
-            None => writeln!(f, "bounds: unknown (the kernel gives no block a finite box)")?,
+            None => writeln!(f, "bounds: unknown (no block has a finite box, or too many blocks to visit)")?,
         }
         writeln!(f, "image: {}x{}, epsilon {:e}", self.size.0, self.size.1, self.epsilon)?;
         for w in &self.warnings {
