@@ -336,7 +336,7 @@ impl WorldParts {
         // of block infos a block's comes from.
         let mut built: Vec<Option<Arc<Complex>>> = vec![None; definitions.len()];
         let mut tables: Vec<Vec<BlockInfo>> = vec![vec![]; definitions.len() + 1];
-        let mut layout = Layout { lists: vec![vec![]; definitions.len() + 1], complexes: vec![None] };
+        let mut layout = Layout { lists: vec![vec![]; definitions.len() + 1], complexes: vec![None], uniform: false };
         let mut definitions: Vec<Option<Flat>> = definitions.into_iter().map(Some).collect();
         for d in order {
             let Some(list) = definitions[d].take() else { continue };
@@ -430,7 +430,8 @@ mod tests {
                              { "objects": [ { "sphere": { "radius": 0.2, "center": [0, 0.4, 0] } } ], "material": "b" } ] },
         "row": { "blocks": [ { "group": "g", "transform": [ { "rotate_z": 20 } ], "blocks": [
                    { "lattice": "pin", "pitch": [1, 0, 0], "count": [3, 1, 1], "transform": [ { "scale": 0.8 } ] } ] },
-                 { "name": "end", "objects": [ { "sphere": { "radius": 0.25, "center": [3.5, 0, 0] } } ] } ] } },
+                 { "name": "end", "objects": [ { "sphere": { "radius": 0.25, "center": [3.5, 0, 0] }, "material": "a" },
+                                              { "sphere": { "radius": 0.3, "center": [3.5, 0, 0] } } ] } ] } },
       "blocks": [ { "name": "first", "objects": [ { "sphere": { "center": [-4, 0, 0] } } ] },
                   { "group": "h", "transform": [ { "rotate_y": 30 }, { "translate": [0, 1, 0] } ], "blocks": [
                     { "lattice": "row", "pitch": [0, 1.2, 0.7], "count": [1, 3, 2] } ] },
@@ -452,6 +453,11 @@ mod tests {
                 (&info.path, info.material, &info.solid_materials)
             );
             assert_eq!(world.complex.block(id).name(), block.name());
+            assert!(std::ptr::eq(world.block_material(id), &world.materials()[info.material]), "block {i}");
+            for j in 0..block.solids().len() {
+                let m = info.solid_materials[j];
+                assert!(std::ptr::eq(world.surface_material(id, j as u32), &world.materials()[m]), "block {i}");
+            }
             // The frame maps a point of the placed block to the same point of the block's own frame.
             match (world.frame(id), info.frame) {
                 (None, None) => {}
@@ -464,7 +470,7 @@ mod tests {
             }
         }
         assert_eq!(world.written_blocks().count(), 1 + 1 + 2, "the top's own block, row's end and pin's 2");
-        assert_eq!(world.sum_over_blocks(|b, _| b.solids().len() as u64), 45);
+        assert_eq!(world.sum_over_blocks(|b, _| b.solids().len() as u64), 45 + 6);
         let rods = world.select_blocks(|b, _| b.name() == "rod", 100).unwrap();
         let want: Vec<u32> = (0..blocks.len() as u32).filter(|&i| blocks[i as usize].name() == "rod").collect();
         assert_eq!(rods.iter().map(|b| b.0).collect::<Vec<_>>(), want);

@@ -271,6 +271,10 @@ pub(crate) struct Layout {
     pub lists: Vec<Vec<Item>>,
     /// By key: the complex of that list (`None` for the top list: `World::complex`).
     pub complexes: Vec<Option<std::sync::Arc<Complex>>>,
+    /// Whether every block's surfaces all have the block's material (no
+    /// object names a material of its own): then a hit's material is read
+    /// off the block, without `Complex::resolve`. Set by `World::new`.
+    pub uniform: bool,
 }
 
 /// One entry of a block list in a [`Layout`].
@@ -305,6 +309,10 @@ impl World {
         };
         let surface_materials =
             if complex.is_assembled() { vec![] } else { tables.iter().flatten().map(uniform).collect() };
+        let mut layout = layout;
+        if let Some(l) = &mut layout {
+            l.uniform = tables.iter().flatten().all(|info| info.solid_materials.iter().all(|&m| m == info.material));
+        }
         World { camera, settings, lights, materials, complex, tables, surface_materials, layout }
     }
 
@@ -472,6 +480,11 @@ impl World {
                 return &self.materials[m as usize];
             }
         }
+        if self.layout.as_ref().is_some_and(|l| l.uniform) {
+            // Every block's surfaces have its material, the block's own key:
+            // no need to resolve the placement.
+            return self.block_material(block);
+        }
         let info = self.block_info(block);
         let m = info.solid_materials.get(solid as usize).copied().unwrap_or(info.material);
         &self.materials[m]
@@ -479,6 +492,11 @@ impl World {
 
     /// The material of a block (its medium, for transparent blocks).
     pub fn block_material(&self, block: complex::BlockId) -> &Material {
+        if self.layout.is_some() {
+            // The block's key is its material's index (`flatten`), read
+            // without resolving the placement.
+            return &self.materials[self.complex.block(block).material().0 as usize];
+        }
         &self.materials[self.block_info(block).material]
     }
 
