@@ -31,6 +31,8 @@ struct Cli {
 enum Command {
     /// Render a scene to OpenEXR (and optionally a PNG preview).
     Render(RenderArgs),
+    /// Join the parts of a render made with --tile into the whole image.
+    Merge(MergeArgs),
     /// Trace one ray and print every block's intervals, the partition and the first hit
     /// (or, with --rays, every ray of a file and its partition).
     Trace(TraceArgs),
@@ -87,6 +89,36 @@ struct RenderArgs {
     /// Write the colour channels as 16-bit half floats.
     #[arg(long)]
     half: bool,
+    /// Exposure of the PNG preview in stops (pixel values are scaled by 2^E).
+    #[arg(long, value_name = "E", default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Render only part I (0-based) of N, a band of rows, to OUT.tile-I-of-N.exr;
+    /// auto/N takes I from SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX.
+    #[arg(long, value_name = "I/N")]
+    tile: Option<String>,
+    /// Skip the part if its file already holds this very tile of this very render.
+    #[arg(long, requires = "tile")]
+    resume: bool,
+    /// Render frame K of an animated scene to OUT.KKKK.exr (and the PNG likewise).
+    #[arg(long, value_name = "K", conflicts_with = "frames")]
+    frame: Option<u32>,
+    /// Render frames A to B, both included, one after another, each to its own OUT.KKKK.exr;
+    /// without A..B the scene's animation.frames.
+    #[arg(long, value_name = "A..B", num_args = 0..=1, default_missing_value = "")]
+    frames: Option<String>,
+}
+
+#[derive(clap::Args)]
+struct MergeArgs {
+    /// The parts (the files of render --tile), in any order.
+    #[arg(required = true, value_name = "PARTS")]
+    parts: Vec<PathBuf>,
+    /// Output EXR file.
+    #[arg(short, long, value_name = "OUT.exr", required = true)]
+    output: PathBuf,
+    /// Also write an sRGB PNG preview.
+    #[arg(long, value_name = "OUT.png")]
+    png: Option<PathBuf>,
     /// Exposure of the PNG preview in stops (pixel values are scaled by 2^E).
     #[arg(long, value_name = "E", default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
@@ -357,6 +389,7 @@ fn triple(v: &[f64]) -> [f64; 3] {
 fn run(command: Command) -> Result<(), Error> {
     match command {
         Command::Render(args) => render(args),
+        Command::Merge(args) => merge(args),
         Command::Trace(args) => trace(args),
         Command::Slice(args) => slice(args),
         Command::Check { scene } => check(&scene),
@@ -370,12 +403,60 @@ fn run(command: Command) -> Result<(), Error> {
 }
 
 /// `komplex render`: the EXR (and the PNG preview), both checked writable
-/// before the render and written only once it is complete.
+/// before the render and written only once it is complete; with `--frame`
+/// or `--frames`, one such pair per frame, each written as it is done.
 fn render(args: RenderArgs) -> Result<(), Error> {
+    render::frame::set_global_threads(args.run.threads)?;
+    let cancel = interrupt_flag();
+    if !args.exposure.is_finite() {
+        return Err(Error::Options(format!("--exposure must be a finite number of stops, got {}", args.exposure)));
+    }
+    let tile = args.tile.as_ref().map(|t| render::tiles::Tile::parse(t, |v| std::env::var(v).ok())).transpose()?;
+    if tile.is_some() && args.png.is_some() {
+        return Err(Error::Options("--png goes with a whole image, not --tile: give it to komplex merge".into()));
+    }
+    let output = args.output.clone().unwrap_or_else(|| default_output(&args.scene));
+    if args.frame.is_none() && args.frames.is_none() {
+        let world = render::load(&args.scene)?;
+        return render_image(world, &args, &output, args.png.as_deref(), None, tile, &cancel);
+    }
+    let animation = render::animate::Animation::read(&args.scene)?;
+    let frames = match (args.frame, args.frames.as_deref()) {
+        (Some(k), _) => k..=k,
+        (None, Some("") | None) => animation.frames().ok_or_else(|| {
+            Error::Options(format!(
+                "--frames without A..B renders the scene's \"animation\": {{\"frames\": [A, B]}}, which {} lacks",
+                args.scene.display()
+            ))
+        })?,
+        (None, Some(range)) => render::animate::parse_frames(range)?,
+    };
+    for k in frames {
+        if cancel.load(Ordering::Relaxed) {
+            return Err(Error::Interrupted);
+        }
+        let world = animation.world_at(k)?;
+        let png = args.png.as_deref().map(|p| render::output::part_path(p, Some(k), None));
+        render_image(world, &args, &output, png.as_deref(), Some(k), tile, &cancel)?;
+    }
+    Ok(())
+}
+
+/// One image of `komplex render` (frame `frame` of an animation, if
+/// given, or tile `tile` of it): the options applied to `world`, the
+/// outputs checked writable, the render, then the PNG and the EXR (or the
+/// part, named by [`render::output::part_path`]).
+fn render_image(
+    mut world: render::world::World,
+    args: &RenderArgs,
+    output: &Path,
+    png: Option<&Path>,
+    frame: Option<u32>,
+    tile: Option<render::tiles::Tile>,
+    cancel: &Arc<AtomicBool>,
+) -> Result<(), Error> {
     let RenderArgs {
         scene,
-        output,
-        png,
         size,
         run: RunArgs { threads, precision },
         samples,
@@ -384,45 +465,67 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         seed,
         half,
         exposure,
+        resume,
+        ..
     } = args;
-    render::frame::set_global_threads(threads)?;
-    let cancel = interrupt_flag();
-    if !exposure.is_finite() {
-        return Err(Error::Options(format!("--exposure must be a finite number of stops, got {exposure}")));
-    }
-    let mut world = render::load(&scene)?;
-    if let Some(n) = samples {
+    let (threads, half, exposure, resume) = (*threads, *half, *exposure, *resume);
+    if let Some(n) = *samples {
         if !(1..=16).contains(&n) {
             return Err(Error::Options(format!("--samples must be between 1 and 16, got {n}")));
         }
         world.settings.samples = n;
     }
-    if let Some(n) = spp {
+    if let Some(n) = *spp {
         if !(1..=render::limits::MAX_SPP).contains(&n) {
             return Err(Error::Options(format!("--spp must be between 1 and {}, got {n}", render::limits::MAX_SPP)));
         }
         world.settings.spp = Some(n);
     }
-    if let Some(t) = noise {
+    if let Some(t) = *noise {
         if !(t.is_finite() && t > 0.0) {
             return Err(Error::Options(format!("--noise must be a finite number > 0, got {t}")));
         }
         world.settings.noise = Some(t);
     }
-    if let Some(s) = seed {
+    if let Some(s) = *seed {
         world.settings.seed = s;
     }
     size.apply(&mut world)?;
-    world.complex.set_precision(precision.into());
-    let output = output.unwrap_or_else(|| default_output(&scene));
+    world.complex.set_precision((*precision).into());
+    let output = render::output::part_path(output, frame, tile.map(|t| (t.index, t.count)));
+    let (width, height) = (world.camera.width(), world.camera.height());
+    let fingerprint = match tile {
+        Some(t) => {
+            t.check_height(height)?;
+            let text = std::fs::read(scene).map_err(|source| Error::Io { path: scene.clone(), source })?;
+            let mut fingerprint = render::tiles::render_fingerprint(&text, &world, half);
+            if let Some(k) = frame {
+                // The parts of different frames of one scene are foreign to each other.
+                fingerprint = fingerprint.bytes("frame", &k.to_le_bytes());
+            }
+            let fingerprint = fingerprint.hex();
+            if resume && output.exists() {
+                match render::tiles::check_complete(&output, t, &fingerprint, (width, height)) {
+                    Ok(()) => {
+                        eprintln!("{}: tile {t} is already complete; skipped (--resume)", output.display());
+                        return Ok(());
+                    }
+                    Err(why) => eprintln!("{}: rendering tile {t} again (--resume): {why}", output.display()),
+                }
+            }
+            fingerprint
+        }
+        None => String::new(),
+    };
+    let rows = tile.map(|t| t.rows(height));
     // Fail before the render, not after it, if an output cannot be written.
     render::output::check_writable(&output)?;
-    if let Some(p) = &png {
+    if let Some(p) = png {
         render::output::check_writable(p)?;
     }
-    let rows = u64::from(world.camera.height());
+    let rows_rendered = rows.map_or(height, |(a, b)| b - a);
     let bar = std::io::stderr().is_terminal().then(|| {
-        let bar = indicatif::ProgressBar::new(rows);
+        let bar = indicatif::ProgressBar::new(u64::from(rows_rendered));
         if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rows {elapsed}") {
             bar.set_style(style);
         }
@@ -433,8 +536,8 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             b.inc(1);
         }
     };
-    let (frame, stats) =
-        render::frame::render_until(&world, render::frame::Options { threads, ..Default::default() }, &tick, &cancel)?;
+    let options = render::frame::Options { threads, rows, ..Default::default() };
+    let (frame, stats) = render::frame::render_until(&world, options, &tick, cancel)?;
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
@@ -444,14 +547,22 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         return Err(Error::Interrupted);
     }
     let color = if half { ColorType::F16 } else { ColorType::F32 };
-    let (width, height) = (frame.width, frame.height);
     // The preview first: the EXR writer takes the frame's planes over.
-    if let Some(p) = &png {
+    if let Some(p) = png {
         render::png::write_png(&frame, p, exposure)?;
     }
-    render::exr::write_exr(frame, &output, color)?;
+    let part = match (tile, rows) {
+        (Some(t), Some((a, b))) => {
+            render::tiles::write_part(frame, &output, color, t, &fingerprint)?;
+            format!(" tile {t}, rows {a}..{b},")
+        }
+        _ => {
+            render::exr::write_exr(frame, &output, color)?;
+            String::new()
+        }
+    };
     eprintln!(
-        "{}: {}x{} in {:.2} s, {} rays, {:.2} Mrays/s",
+        "{}: {}x{}{part} in {:.2} s, {} rays, {:.2} Mrays/s",
         output.display(),
         width,
         height,
@@ -459,6 +570,28 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         stats.rays,
         stats.rays_per_second() / 1e6
     );
+    Ok(())
+}
+
+/// `komplex merge`: the parts of a tiled render joined into the whole
+/// image (and its preview), every part checked before anything is written.
+fn merge(args: MergeArgs) -> Result<(), Error> {
+    let MergeArgs { parts, output, png, exposure } = args;
+    if !exposure.is_finite() {
+        return Err(Error::Options(format!("--exposure must be a finite number of stops, got {exposure}")));
+    }
+    render::output::check_writable(&output)?;
+    if let Some(p) = &png {
+        render::output::check_writable(p)?;
+    }
+    let start = std::time::Instant::now();
+    let merge = render::tiles::merge(&parts)?;
+    let (width, height, count) = (merge.width, merge.height, merge.parts.len());
+    if let Some(p) = &png {
+        render::png::write_png_planes(p, (width, height), &merge.rgb()?, exposure)?;
+    }
+    merge.write(&output)?;
+    eprintln!("{}: {width}x{height} from {count} parts in {:.2} s", output.display(), start.elapsed().as_secs_f64());
     Ok(())
 }
 

@@ -5,7 +5,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use crate::support::{komplex, scene, tempdir, text, write_scene};
+use crate::support::{komplex, komplex_env, komplex_ok, scene, tempdir, text, write_scene};
 
 const CAMERA: &str = r#""camera": { "eye": [0, 0, 5], "direction": [0, 0, -1], "width": 8, "height": 6 }"#;
 
@@ -62,6 +62,17 @@ fn check<'a>(input: impl Into<Input<'a>>, code: i32, needles: &[&str]) {
 
 /// [`check`] with more files in the fixture directory (name, contents).
 fn check_with<'a>(files: &[(&str, &[u8])], input: impl Into<Input<'a>>, code: i32, needles: &[&str]) {
+    check_env(&[], files, input, code, needles);
+}
+
+/// [`check_with`] with environment variables set.
+fn check_env<'a>(
+    env: &[(&str, &str)],
+    files: &[(&str, &[u8])],
+    input: impl Into<Input<'a>>,
+    code: i32,
+    needles: &[&str],
+) {
     let dir = tempdir();
     let d = dir.path();
     for (name, contents) in files {
@@ -80,7 +91,7 @@ fn check_with<'a>(files: &[(&str, &[u8])], input: impl Into<Input<'a>>, code: i3
         }
         Input::Args(args) => {
             let before = snapshot(d);
-            (komplex(d, args), before)
+            (komplex_env(d, args, env), before)
         }
     };
     let (o, before) = o;
@@ -310,6 +321,98 @@ fn empty_blocks_and_empty_scenes_are_errors() {
     check(&*blocks(""), 1, &["blocks, line 1", "the scene has no blocks"]);
     // Groups that hold nothing count as no blocks.
     check(&*blocks(r#"{ "group": "g", "blocks": [] }"#), 1, &["the scene has no blocks"]);
+}
+
+#[test]
+fn bad_steps_keys_and_frames_name_the_place() {
+    let step = |s: &str| blocks(&format!(r#"{{ "objects": [ {{ "sphere": {{}}, "transform": [ {s} ] }} ] }}"#));
+    let at = "blocks[0].objects[0].transform[0]";
+    check(
+        &*step(
+            r#"{ "translate": { "keys": [ { "frame": 2, "value": [0, 0, 0] }, { "frame": 1, "value": [1, 0, 0] } ] } }"#,
+        ),
+        1,
+        &[&format!("{at}.translate.keys[1], line 1, column 241: key frames must increase: frame 1 follows frame 2")],
+    );
+    check(
+        &*step(r#"{ "rotate_x": { "keys": [] } }"#),
+        1,
+        &[&format!("{at}.rotate_x.keys, line 1, column 168: keys must not be empty")],
+    );
+    check(
+        &*step(r#"{ "rotate_x": { "keys": [ { "frame": -1, "value": 5 } ] } }"#),
+        1,
+        &[&format!(
+            "{at}.rotate_x.keys[0], line 1, column 197: a key's frame must be between 0 and 4294967295, got -1"
+        )],
+    );
+    check(
+        &*step(r#"{ "matrix": { "keys": [] } }"#),
+        1,
+        &[&format!("{at}.matrix, line 1, column 156: a `matrix` step cannot be keyed: key `translate`, `scale`")],
+    );
+    check(
+        &*step(r#"{ "rotate_x": { "kyes": [] } }"#),
+        1,
+        &[&format!("{at}.rotate_x, line 1, column 164: unknown field `kyes`, expected `keys` (did you mean `keys`?)")],
+    );
+    check(
+        &*format!(
+            r#"{{ "animation": {{ "frames": [5, 1] }}, {CAMERA}, "blocks": [ {{ "objects": [ {{ "sphere": {{}} }} ] }} ] }}"#
+        ),
+        1,
+        &["animation.frames, line 1, column 28: the first frame comes after the last: [5, 1]"],
+    );
+    // Errors that depend on the frame: `--frame 2` or `3` on `anim.json`.
+    let at_frame = |json: &str, frame: &str, needle: &str| {
+        check_with(
+            &[("anim.json", json.as_bytes())],
+            &["render", "anim.json", "-o", "out.exr", "--frame", frame],
+            1,
+            &[needle],
+        );
+    };
+    at_frame(
+        &step(r#"{ "scale": { "keys": [ { "frame": 1, "value": 1 }, { "frame": 5, "value": -1 } ] } }"#),
+        "3",
+        "anim.json: blocks[0].objects[0].transform[0], line 1, column 143: at frame 3: block \"block 1\", object 1: the transform is singular",
+    );
+    let direction = |to: &str| {
+        format!(
+            r#"{{ "camera": {{ "eye": [0, 0, 5], "direction": {{ "keys": [ {{ "frame": 1, "value": [0, 0, -1] }}, {{ "frame": 3, "value": {to} }} ] }}, "width": 8, "height": 6 }}, "blocks": [ {{ "objects": [ {{ "sphere": {{}} }} ] }} ] }}"#
+        )
+    };
+    at_frame(
+        &direction("[0, 0, 1]"),
+        "2",
+        "anim.json: camera.direction.keys[1], line 1, column 95: at frame 2: keys 0 and 1 point in opposite directions",
+    );
+    at_frame(
+        &direction("[0, 0, 0]"),
+        "2",
+        "camera.direction.keys[1], line 1, column 95: at frame 2: the direction is zero or not finite",
+    );
+    // The options.
+    check(
+        &["render", "ok.json", "-o", "out.exr", "--frame", "1", "--frames", "1..2"],
+        2,
+        &["the argument '--frame <K>' cannot be used with '--frames [<A..B>]'"],
+    );
+    check(
+        &["render", "ok.json", "-o", "out.exr", "--frames", "1-3"],
+        1,
+        &["--frames \"1-3\": expected A..B, the first and the last frame (both rendered)"],
+    );
+    check(
+        &["render", "ok.json", "-o", "out.exr", "--frames", "5..1"],
+        1,
+        &["--frames 5..1: the first frame comes after the last"],
+    );
+    check(
+        &["render", "ok.json", "-o", "out.exr", "--frames"],
+        1,
+        &["--frames without A..B renders the scene's \"animation\": {\"frames\": [A, B]}, which ok.json lacks"],
+    );
 }
 
 /// A scene whose camera is at `[0, 0, 5]` with the further members
@@ -925,4 +1028,140 @@ fn commands_that_list_every_block_refuse_huge_expansions() {
         1,
         &["error: export-pov: ", many, "65536 it writes out one by one"],
     );
+}
+
+#[test]
+fn bad_tiles_exit_1_and_name_the_option() {
+    let tile =
+        |t: &str, needle: &str| check(Input::Args(&["render", "ok.json", "-o", "out.exr", "--tile", t]), 1, &[needle]);
+    tile("1-4", r#"--tile "1-4": expected I/N (part I of N, 0-based, e.g. 2/4) or auto/N, with whole numbers"#);
+    tile("4/4", "--tile 4/4: the part index must be below 4 (parts are numbered from 0)");
+    tile("0/0", "--tile 0/0: the number of parts must be at least 1");
+    tile("0/7", "--tile 0/7: 7 parts of an image 6 rows high; at most 6 (a part is a band of whole rows)");
+    tile("auto/4", "--tile auto/4: neither SLURM_ARRAY_TASK_ID nor JOB_COMPLETION_INDEX is set, so there is no task index to render");
+    let auto = ["render", "ok.json", "-o", "out.exr", "--tile", "auto/4"];
+    for (name, value) in [("SLURM_ARRAY_TASK_ID", "4"), ("SLURM_ARRAY_TASK_ID", "x"), ("JOB_COMPLETION_INDEX", "-1")] {
+        check_env(
+            &[(name, value)],
+            &[],
+            &auto,
+            1,
+            &[&format!("--tile auto/4: {name} is {value:?}, not a part index from 0 to 3 (the index is read from SLURM_ARRAY_TASK_ID, else JOB_COMPLETION_INDEX)")],
+        );
+    }
+    check(
+        &["render", "ok.json", "-o", "out.exr", "--tile", "0/2", "--png", "p.png"],
+        1,
+        &["--png goes with a whole image, not --tile: give it to komplex merge"],
+    );
+    check(&["render", "ok.json", "--resume"], 2, &["required arguments were not provided", "--tile <I/N>"]);
+}
+
+#[test]
+fn bad_merges_exit_1_and_name_the_part() {
+    // Parts of `ok.json` (the fixture's scene), rendered beforehand.
+    let made = tempdir();
+    let m = made.path();
+    write_scene(m, "ok.json", OK);
+    for args in [
+        &["-o", "p.exr", "--tile", "0/3"][..],
+        &["-o", "p.exr", "--tile", "1/3"],
+        &["-o", "p.exr", "--tile", "2/3"],
+        &["-o", "q.exr", "--tile", "1/3", "--seed", "1"],
+        &["-o", "w.exr", "--tile", "1/2"],
+        &["-o", "one.exr"],
+    ] {
+        komplex_ok(m, &[&["render", "ok.json"], args].concat());
+    }
+    let read = |name: &str| std::fs::read(m.join(name)).unwrap();
+    let p1 = read("p.tile-1-of-3.exr");
+    let crafted = |rows, names: &[&str], tags: &[(&str, &str)], layers| {
+        crate::tiles::crafted_part((8, 6), rows, names, tags, layers)
+    };
+    let tags = [("komplex.tile", "0/2"), ("komplex.render", "r")];
+    use exr::prelude::Encoding;
+    let encoded = |encoding, rows, tags: &[(&str, &str)]| {
+        crate::tiles::crafted_encoded(encoding, (8, 6), rows, &["B", "G", "R"], tags, 1)
+    };
+    let files: Vec<(&str, Vec<u8>)> = vec![
+        ("p.tile-0-of-3.exr", read("p.tile-0-of-3.exr")),
+        ("p.tile-1-of-3.exr", p1.clone()),
+        ("p.tile-2-of-3.exr", read("p.tile-2-of-3.exr")),
+        ("q.tile-1-of-3.exr", read("q.tile-1-of-3.exr")),
+        ("w.tile-1-of-2.exr", read("w.tile-1-of-2.exr")),
+        ("one.exr", read("one.exr")),
+        ("cut.exr", p1[..p1.len() - 100].to_vec()),
+        ("a.exr", crafted((0, 3), &["B", "G", "R"], &tags, 1)),
+        (
+            "size.exr",
+            crate::tiles::crafted_part(
+                (8, 5),
+                (2, 5),
+                &["B", "G", "R"],
+                &[("komplex.tile", "1/2"), ("komplex.render", "r")],
+                1,
+            ),
+        ),
+        ("channels.exr", crafted((3, 6), &["G", "R"], &[("komplex.tile", "1/2"), ("komplex.render", "r")], 1)),
+        ("window.exr", crafted((2, 6), &["B", "G", "R"], &[("komplex.tile", "1/2"), ("komplex.render", "r")], 1)),
+        ("index.exr", crafted((0, 3), &["B", "G", "R"], &[("komplex.tile", "5/4"), ("komplex.render", "r")], 1)),
+        ("norender.exr", crafted((0, 3), &["B", "G", "R"], &[("komplex.tile", "0/2")], 1)),
+        ("layers.exr", crafted((0, 3), &["B", "G", "R"], &tags, 2)),
+        ("depth.exr", crafted((0, 6), &["Z"], &[("komplex.tile", "0/1"), ("komplex.render", "r")], 1)),
+        ("zip16.exr", encoded(Encoding::SMALL_LOSSLESS, (3, 6), &[("komplex.tile", "1/2"), ("komplex.render", "r")])),
+        ("tiled.exr", encoded(Encoding::FAST_LOSSLESS, (0, 3), &tags)),
+    ];
+    let files: Vec<(&str, &[u8])> = files.iter().map(|(n, b)| (*n, b.as_slice())).collect();
+    let merge = |parts: &[&str], code: i32, needle: &str| {
+        let args = [&["merge"], parts, &["-o", "m.exr", "--png", "m.png"]].concat();
+        check_with(&files, Input::Args(&args), code, &[needle]);
+    };
+    let (p0, p1, p2) = ("p.tile-0-of-3.exr", "p.tile-1-of-3.exr", "p.tile-2-of-3.exr");
+    merge(&[p0, p2], 1, "tile 1/3 is missing: none of the 2 parts given holds it (tile 1 would be p.tile-1-of-3.exr)");
+    merge(&[p0, p1, p1, p2], 1, "p.tile-1-of-3.exr: tile 1/3 again: p.tile-1-of-3.exr holds it too");
+    merge(&[p0, "q.tile-1-of-3.exr", p2], 1, "q.tile-1-of-3.exr: a foreign part: it is a tile of another render (another scene or other options: komplex.render ");
+    merge(&[p0, "w.tile-1-of-2.exr"], 1, "w.tile-1-of-2.exr: a foreign part: tile 1/2 is one of 2 parts, not 3, unlike p.tile-0-of-3.exr (the first part)");
+    merge(
+        &["a.exr", "size.exr"],
+        1,
+        "size.exr: a foreign part: its image is 8x5, not 8x6, unlike a.exr (the first part)",
+    );
+    merge(&["a.exr", "channels.exr"], 1, "channels.exr: a foreign part: its channels are [G F32, R F32], not [B F32, G F32, R F32], unlike a.exr (the first part)");
+    merge(
+        &["a.exr", "window.exr"],
+        1,
+        "window.exr: tile 1/2 of an image 8x6 is rows 3..6 of the full width, but the data window is 8x4 at (0, 2)",
+    );
+    merge(
+        &[p0, p1, p2, "one.exr"],
+        1,
+        "one.exr: not a tile of a render: the header has no komplex.tile attribute (komplex render --tile writes it)",
+    );
+    merge(&[p0, "file"], 1, "file: not a readable OpenEXR file: invalid: file identifier missing");
+    merge(&[p0, "cut.exr", p2], 1, "cut.exr: not a readable OpenEXR file: invalid: reference to missing bytes");
+    merge(&["index.exr"], 1, r#"index.exr: komplex.tile is "5/4", not I/N with I < N"#);
+    merge(&["norender.exr"], 1, "norender.exr: tile 0/2 has no komplex.render attribute");
+    merge(&["layers.exr"], 1, "layers.exr: holds 2 parts; a tile holds one");
+    merge(
+        &["a.exr", "zip16.exr"],
+        1,
+        "zip16.exr: a foreign part: its compression is ZIP16, not Uncompressed, unlike a.exr (the first part)",
+    );
+    merge(&["tiled.exr"], 1, "tiled.exr: its pixels are stored in tiles or deep samples, not in scanlines as a part's");
+    merge(&["zip16.exr"], 1, "zip16.exr: its compression (ZIP16) stores 16 rows a block, and rows 3..6 are not whole blocks of the image; render --tile writes one row a block");
+    merge(&["depth.exr"], 1, "--png: the parts have no R, G and B channels");
+    merge(&[p0, "none.exr"], 3, "none.exr: No such file or directory (os error 2)");
+    check_with(
+        &files,
+        &["merge", p0, p1, p2, "-o", "missing/m.exr"],
+        3,
+        &["missing/m.exr: cannot create a file in directory missing"],
+    );
+    check_with(
+        &files,
+        &["merge", p0, p1, p2, "-o", "m.exr", "--png", "m.png", "--exposure", "nan"],
+        1,
+        &["--exposure must be a finite number of stops, got NaN"],
+    );
+    check(&["merge", "-o", "m.exr"], 2, &["required arguments were not provided", "<PARTS>"]);
 }

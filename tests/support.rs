@@ -38,7 +38,19 @@ pub fn bench_scenes() -> Vec<PathBuf> {
 
 /// Runs `komplex` with `args` in `cwd`.
 pub fn komplex(cwd: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_komplex")).args(args).current_dir(cwd).output().expect("komplex runs")
+    komplex_env(cwd, args, &[])
+}
+
+/// Runs `komplex` with `args` in `cwd` and the variables `env` set. The
+/// scheduler's task index variables (`--tile auto/N`) are set only as `env`
+/// sets them, whatever the tests run under.
+pub fn komplex_env(cwd: &Path, args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_komplex"));
+    command.args(args).current_dir(cwd);
+    for name in ["SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"] {
+        command.env_remove(name);
+    }
+    command.envs(env.iter().copied()).output().expect("komplex runs")
 }
 
 /// Status, stdout and stderr as text, for failure messages.

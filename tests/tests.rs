@@ -4,6 +4,7 @@
 mod geom;
 mod support;
 
+mod anim;
 mod bench;
 mod camera;
 mod cli;
@@ -17,6 +18,7 @@ mod mutations;
 mod shading;
 mod slice;
 mod textures;
+mod tiles;
 mod trace;
 
 mod path;

@@ -179,7 +179,10 @@ impl Complex {
                 Member::Placed(p) => {
                     let part = Part::new(p, next, index)?;
                     next += u64::from(part.stride) * part.elements();
-                    parts.push(part);
+                    // An empty definition takes no ids: nothing to find.
+                    if part.stride > 0 {
+                        parts.push(part);
+                    }
                 }
             }
             if next > MAX_BLOCKS {

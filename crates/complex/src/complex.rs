@@ -571,15 +571,16 @@ impl Complex {
     /// the same slabs as the walk's), so they all end before ε and the ε
     /// rule would remove every one of them. The spans are the same.
     pub(crate) fn collect_spans(&self, ray: &Ray, max_t: f64, out: &mut BlockSpans) {
-        if self.large {
-            return self.collect_spans_in::<SpanBuf>(ray, max_t, out);
+        match (self.assembly.is_some(), self.large) {
+            (true, _) => self.collect_spans_in::<Spans, true>(ray, max_t, out),
+            (false, true) => self.collect_spans_in::<SpanBuf, false>(ray, max_t, out),
+            (false, false) => self.collect_spans_in::<Spans, false>(ray, max_t, out),
         }
-        self.collect_spans_in::<Spans>(ray, max_t, out)
     }
 
     /// [`Complex::collect_spans`] with scratch `S` (see [`Scratch`]).
     #[inline(always)]
-    fn collect_spans_in<S: Scratch>(&self, ray: &Ray, max_t: f64, out: &mut BlockSpans) {
+    fn collect_spans_in<S: Scratch, const P: bool>(&self, ray: &Ray, max_t: f64, out: &mut BlockSpans) {
         out.clear();
         let eps = self.epsilon;
         let mut push = |i: u32, spans: &[Interval]| {
@@ -595,7 +596,9 @@ impl Complex {
         for i in self.unbounded_crossed(&rb, from, max_t) {
             push(i, self.block_spans(i, ray, &rb, &mut scratch));
         }
-        self.walk_placed(ray, from, &mut t_max, &mut |i, spans, _| push(i, spans));
+        if P {
+            self.walk_placed(ray, from, &mut t_max, &mut |i, spans, _| push(i, spans));
+        }
         out.sort();
     }
 
@@ -613,15 +616,16 @@ impl Complex {
         out: &mut BlockSpans,
         previous: Option<&BlockSpans>,
     ) -> f64 {
-        if self.large {
-            return self.collect_spans_to_first_end_in::<SpanBuf>(ray, after, out, previous);
+        match (self.assembly.is_some(), self.large) {
+            (true, _) => self.collect_spans_to_first_end_in::<Spans, true>(ray, after, out, previous),
+            (false, true) => self.collect_spans_to_first_end_in::<SpanBuf, false>(ray, after, out, previous),
+            (false, false) => self.collect_spans_to_first_end_in::<Spans, false>(ray, after, out, previous),
         }
-        self.collect_spans_to_first_end_in::<Spans>(ray, after, out, previous)
     }
 
     /// [`Complex::collect_spans_to_first_end`] with scratch `S` (see [`Scratch`]).
     #[inline(always)]
-    fn collect_spans_to_first_end_in<S: Scratch>(
+    fn collect_spans_to_first_end_in<S: Scratch, const P: bool>(
         &self,
         ray: &Ray,
         after: f64,
@@ -656,10 +660,12 @@ impl Complex {
                 None => push(i, self.slot_spans(k, ray, &rb, &mut scratch), t_max),
             }
         });
-        self.walk_placed(ray, 0.0, &mut t_max, &mut |i, spans, t_max| match known(i) {
-            Some(ivs) => push(i, ivs, t_max),
-            None => push(i, spans, t_max),
-        });
+        if P {
+            self.walk_placed(ray, 0.0, &mut t_max, &mut |i, spans, t_max| match known(i) {
+                Some(ivs) => push(i, ivs, t_max),
+                None => push(i, spans, t_max),
+            });
+        }
         out.sort();
         t_max
     }
@@ -784,7 +790,7 @@ impl Complex {
             return None;
         }
         if self.plain {
-            return self.cast_opaque::<Spans>(ray, max_t);
+            return self.cast_opaque::<Spans, false>(ray, max_t);
         }
         self.cast_ray_other(ray, max_t)
     }
@@ -793,10 +799,16 @@ impl Complex {
     /// out of line (the common case's function stays as small as it was).
     #[inline(never)]
     fn cast_ray_other(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
+        if self.assembly.is_some() {
+            return match self.any_transparent {
+                false => self.cast_opaque::<Spans, true>(ray, max_t),
+                true => self.cast_general::<Spans, true>(ray, max_t),
+            };
+        }
         match (self.any_transparent, self.large) {
-            (false, _) => self.cast_opaque::<SpanBuf>(ray, max_t),
-            (true, false) => self.cast_general::<Spans>(ray, max_t),
-            (true, true) => self.cast_general::<SpanBuf>(ray, max_t),
+            (false, _) => self.cast_opaque::<SpanBuf, false>(ray, max_t),
+            (true, false) => self.cast_general::<Spans, false>(ray, max_t),
+            (true, true) => self.cast_general::<SpanBuf, false>(ray, max_t),
         }
     }
 
@@ -820,7 +832,7 @@ impl Complex {
             return false;
         }
         if self.plain {
-            return self.occluded_opaque::<Spans>(ray, max_t, occluder);
+            return self.occluded_opaque::<Spans, false>(ray, max_t, occluder);
         }
         self.occluded_other(ray, max_t, occluder)
     }
@@ -829,17 +841,23 @@ impl Complex {
     /// blocks, out of line.
     #[inline(never)]
     fn occluded_other(&self, ray: &Ray, max_t: f64, occluder: &mut Occluder) -> bool {
+        if self.assembly.is_some() {
+            return match self.any_transparent {
+                false => self.occluded_opaque::<Spans, true>(ray, max_t, occluder),
+                true => self.cast_general::<Spans, true>(ray, max_t).is_some(),
+            };
+        }
         match (self.any_transparent, self.large) {
-            (false, _) => self.occluded_opaque::<SpanBuf>(ray, max_t, occluder),
-            (true, false) => self.cast_general::<Spans>(ray, max_t).is_some(),
-            (true, true) => self.cast_general::<SpanBuf>(ray, max_t).is_some(),
+            (false, _) => self.occluded_opaque::<SpanBuf, false>(ray, max_t, occluder),
+            (true, false) => self.cast_general::<Spans, false>(ray, max_t).is_some(),
+            (true, true) => self.cast_general::<SpanBuf, false>(ray, max_t).is_some(),
         }
     }
 
     /// [`Complex::occluded_with`] of a complex of opaque blocks, with
     /// scratch `S` (see [`Scratch`]).
     #[inline(always)]
-    fn occluded_opaque<S: Scratch>(&self, ray: &Ray, max_t: f64, occluder: &mut Occluder) -> bool {
+    fn occluded_opaque<S: Scratch, const P: bool>(&self, ray: &Ray, max_t: f64, occluder: &mut Occluder) -> bool {
         let eps = self.epsilon;
         let rb = RayBoxes::new(ray);
         // One walk answers both questions: is the ray inside the union just
@@ -882,13 +900,15 @@ impl Complex {
                 stopper = Some(k);
             }
         });
-        self.walk_placed(ray, eps, &mut t_max, &mut |_, spans, t_max| {
-            look(spans, t_max);
-        });
+        if P {
+            self.walk_placed(ray, eps, &mut t_max, &mut |_, spans, t_max| {
+                look(spans, t_max);
+            });
+        }
         // Keep the hint while it stops the rays, else the block that did.
         occluder.slot = if hint_stops { tried } else { stopper };
         if run_end > eps {
-            return self.run_exit::<S>(ray, &rb, run_end, max_t).is_some();
+            return self.run_exit::<S, P>(ray, &rb, run_end, max_t).is_some();
         }
         found
     }
@@ -898,13 +918,13 @@ impl Complex {
     /// visibly. Each step is one front-to-back BVH query for the next end
     /// (with early exit) and one for the blocks covering the ray just after
     /// it; nothing is stored, so nothing is allocated.
-    fn cast_general<S: Scratch>(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
+    fn cast_general<S: Scratch, const P: bool>(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
         let rb = RayBoxes::new(ray);
         let mut tau = self.epsilon;
-        let mut before = self.owner_after::<S>(ray, &rb, tau);
+        let mut before = self.owner_after::<S, P>(ray, &rb, tau);
         loop {
-            let t = self.next_end::<S>(ray, &rb, tau, max_t)?;
-            let after = self.owner_after::<S>(ray, &rb, t);
+            let t = self.next_end::<S, P>(ray, &rb, tau, max_t)?;
+            let after = self.owner_after::<S, P>(ray, &rb, t);
             if after != before {
                 if self.visible_change(before, after) {
                     if let Some(hit) = self.event_hit::<S>(ray, &rb, t, before, after) {
@@ -919,7 +939,7 @@ impl Complex {
 
     /// The owner of the ray just after `t`: the blocks with an interval
     /// `enter <= t < exit`, by the priority rule.
-    fn owner_after<S: Scratch>(&self, ray: &Ray, rb: &RayBoxes, t: f64) -> Option<BlockId> {
+    fn owner_after<S: Scratch, const P: bool>(&self, ray: &Ray, rb: &RayBoxes, t: f64) -> Option<BlockId> {
         let (mut opaque, mut transparent) = (u32::MAX, u32::MAX);
         let mut consider = |i: u32, spans: &[Interval]| {
             let best = if self.block(BlockId(i)).is_transparent() { &mut transparent } else { &mut opaque };
@@ -935,12 +955,14 @@ impl Complex {
         for i in self.unbounded_crossed(rb, t, t) {
             consider(i, self.block_spans(i, ray, rb, &mut scratch));
         }
-        self.walk_placed(ray, t, &mut t_hi, &mut |i, spans, _| consider(i, spans));
+        if P {
+            self.walk_placed(ray, t, &mut t_hi, &mut |i, spans, _| consider(i, spans));
+        }
         [opaque, transparent].into_iter().find(|&i| i != u32::MAX).map(BlockId)
     }
 
     /// The smallest finite end of any block's interval in `(tau, max_t]`.
-    fn next_end<S: Scratch>(&self, ray: &Ray, rb: &RayBoxes, tau: f64, max_t: f64) -> Option<f64> {
+    fn next_end<S: Scratch, const P: bool>(&self, ray: &Ray, rb: &RayBoxes, tau: f64, max_t: f64) -> Option<f64> {
         let mut best: Option<f64> = None;
         let mut consider = |spans: &[Interval], t_max: &mut f64| {
             for iv in spans {
@@ -959,7 +981,9 @@ impl Complex {
         }
         self.bvh
             .traverse(rb, tau, &mut t_max, |k, _, t_max| consider(self.slot_spans(k, ray, rb, &mut scratch), t_max));
-        self.walk_placed(ray, tau, &mut t_max, &mut |_, spans, t_max| consider(spans, t_max));
+        if P {
+            self.walk_placed(ray, tau, &mut t_max, &mut |_, spans, t_max| consider(spans, t_max));
+        }
         best
     }
 
@@ -1021,7 +1045,7 @@ impl Complex {
     }
 
     /// `cast_ray` for complexes of opaque blocks only.
-    fn cast_opaque<S: Scratch>(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
+    fn cast_opaque<S: Scratch, const P: bool>(&self, ray: &Ray, max_t: f64) -> Option<Hit> {
         let eps = self.epsilon;
         let rb = RayBoxes::new(ray);
         // One front-to-back walk with early exit finds the nearest entry
@@ -1039,8 +1063,10 @@ impl Complex {
         self.bvh.traverse(&rb, eps, &mut t_max, |k, _, t_max| {
             nearest.consider(self.kernel.block(k), Some(k), self.slot_spans(k, ray, &rb, &mut scratch), t_max)
         });
-        self.walk_placed(ray, eps, &mut t_max, &mut |i, spans, t_max| nearest.consider(i, None, spans, t_max));
-        self.nearest_hit::<S>(ray, &rb, &nearest, max_t)
+        if P {
+            self.walk_placed(ray, eps, &mut t_max, &mut |i, spans, t_max| nearest.consider(i, None, spans, t_max));
+        }
+        self.nearest_hit::<S, P>(ray, &rb, &nearest, max_t)
     }
 
     /// [`Complex::cast_ray`] of four rays, for coherent rays such as a
@@ -1067,14 +1093,20 @@ impl Complex {
             let spans = self.slot_spans(k, &rays[lane], &rbs[lane], &mut scratch);
             nearest[lane].consider(self.kernel.block(k), Some(k), spans, &mut t_max[lane]);
         });
-        [0, 1, 2, 3].map(|lane| self.nearest_hit::<Spans>(&rays[lane], &rbs[lane], &nearest[lane], max_t))
+        [0, 1, 2, 3].map(|lane| self.nearest_hit::<Spans, false>(&rays[lane], &rbs[lane], &nearest[lane], max_t))
     }
 
     /// The hit a [`Nearest`] search found: the exit of the run the ray
     /// starts in, else the nearest entry.
-    fn nearest_hit<S: Scratch>(&self, ray: &Ray, rb: &RayBoxes, nearest: &Nearest, max_t: f64) -> Option<Hit> {
+    fn nearest_hit<S: Scratch, const P: bool>(
+        &self,
+        ray: &Ray,
+        rb: &RayBoxes,
+        nearest: &Nearest,
+        max_t: f64,
+    ) -> Option<Hit> {
         if nearest.run_end > self.epsilon {
-            return self.run_exit::<S>(ray, rb, nearest.run_end, max_t);
+            return self.run_exit::<S, P>(ray, rb, nearest.run_end, max_t);
         }
         let (t, block, solid, slot) = nearest.best?;
         // The normal from the packed copy of the solid, which the test just
@@ -1091,7 +1123,13 @@ impl Complex {
     }
 
     /// The exit from the run of overlapping intervals containing `(ε, run_end]`.
-    fn run_exit<S: Scratch>(&self, ray: &Ray, rb: &RayBoxes, mut run_end: f64, max_t: f64) -> Option<Hit> {
+    fn run_exit<S: Scratch, const P: bool>(
+        &self,
+        ray: &Ray,
+        rb: &RayBoxes,
+        mut run_end: f64,
+        max_t: f64,
+    ) -> Option<Hit> {
         loop {
             let mut next = run_end;
             // The lowest block id whose interval ends exactly at `next`: the
@@ -1118,7 +1156,9 @@ impl Complex {
             for i in self.unbounded_crossed(rb, self.epsilon, run_end) {
                 extend(i, self.block_spans(i, ray, rb, &mut scratch));
             }
-            self.walk_placed(ray, self.epsilon, &mut t_hi, &mut |i, spans, _| extend(i, spans));
+            if P {
+                self.walk_placed(ray, self.epsilon, &mut t_hi, &mut |i, spans, _| extend(i, spans));
+            }
             if next > run_end {
                 if next > max_t {
                     return None;

@@ -346,3 +346,24 @@ fn bad_placements_are_errors() {
         Placement { pitch: Vector3::repeat(1.0), count: [2, 1, 1], ..Placement::instance(open, Transform::identity()) };
     assert!(matches!(err(Member::Placed(lattice)), ComplexError::BadPlacement { .. }));
 }
+
+#[test]
+fn empty_definitions_take_no_ids() {
+    let empty = Arc::new(Complex::new(Vec::new(), ComplexOptions::default()).expect("an empty complex"));
+    let ball = Block::new("ball", ball([0.0; 3], 1.0), Opacity::Opaque, MaterialKey(0)).expect("valid test input");
+    let members = vec![
+        Member::Placed(Placement::instance(empty.clone(), Transform::identity())),
+        Member::Block(ball),
+        Member::Placed(Placement {
+            pitch: Vector3::repeat(1.0),
+            count: [3, 1, 1],
+            ..Placement::instance(empty, Transform::identity())
+        }),
+    ];
+    let scene = Complex::assemble(members, ComplexOptions::default()).expect("valid test input");
+    assert_eq!(scene.len(), 1);
+    assert_eq!(scene.block(BlockId(0)).name(), "ball");
+    assert_eq!(scene.contains_point(&Point3::origin()), Some(BlockId(0)));
+    let ray = Ray::new(Point3::new(0.0, 0.0, -5.0), Vector3::z()).expect("valid test input");
+    assert_eq!(scene.cast_ray(&ray, f64::INFINITY).map(|h| (h.block, h.t)), Some((BlockId(0), 4.0)));
+}

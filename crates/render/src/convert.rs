@@ -19,10 +19,16 @@ use crate::world::{BlockInfo, Item, Layout, Light, Material, Model, Settings, Te
 
 /// Reads and converts a scene file.
 pub fn load(path: &Path) -> Result<World, Error> {
+    let text = read_text(path)?;
+    SceneFile::load_str(&text).map_err(|source| Error::Scene { file: path.to_path_buf(), source })
+}
+
+/// Reads a scene file's text; bad UTF-8 is a scene error with its place.
+pub(crate) fn read_text(path: &Path) -> Result<String, Error> {
     let bytes = std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
     let scene_error = |source| Error::Scene { file: path.to_path_buf(), source };
     // Bad encoding is bad input (exit 1), located like a syntax error.
-    let text = String::from_utf8(bytes).map_err(|e| {
+    String::from_utf8(bytes).map_err(|e| {
         let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
         let valid = std::str::from_utf8(valid).unwrap_or_default();
         let line = valid.matches('\n').count() + 1;
@@ -30,8 +36,7 @@ pub fn load(path: &Path) -> Result<World, Error> {
         let byte = e.as_bytes()[e.utf8_error().valid_up_to()];
         let message = format!("the file is not UTF-8 (byte 0x{byte:02x})");
         scene_error(SceneError::Parse { path: String::new(), line, column, message })
-    })?;
-    SceneFile::load_str(&text).map_err(scene_error)
+    })
 }
 
 /// A colour or reflectance: finite and not negative (negative light or
@@ -121,7 +126,7 @@ fn camera_field(e: &CameraError, c: &CameraSpec) -> &'static str {
         CameraError::ZeroDirection => "camera.direction",
         // The eye is finite (checked first); an up vector of finite
         // components can still have a norm that overflows.
-        CameraError::NonFinite if vec3(c.up).norm().is_finite() => "camera.eye",
+        CameraError::NonFinite if vec3(*c.up.first()).norm().is_finite() => "camera.eye",
         CameraError::NonFinite | CameraError::UpParallel => "camera.up",
         CameraError::EmptyImage(0, _) => "camera.width",
         CameraError::EmptyImage(..) => "camera.height",
@@ -137,11 +142,13 @@ fn camera_field(e: &CameraError, c: &CameraSpec) -> &'static str {
 
 /// The camera of `c` (docs/model.md §4): the pinhole, then the projection
 /// and the lens. `focus_distance` defaults to `|direction|`, so that
-/// `direction = target - eye` focuses on the target.
+/// `direction = target - eye` focuses on the target. Keyed members are
+/// read at their first key (a scene resolved at a frame has none).
 fn camera(c: &CameraSpec) -> Result<Camera, SceneError> {
-    finite_triple(&c.eye, "camera.eye", "the eye")?;
-    finite_triple(&c.direction, "camera.direction", "the direction")?;
-    finite_triple(&c.up, "camera.up", "the up vector")?;
+    let (eye, direction, up) = (*c.eye.first(), *c.direction.first(), *c.up.first());
+    finite_triple(&eye, "camera.eye", "the eye")?;
+    finite_triple(&direction, "camera.direction", "the direction")?;
+    finite_triple(&up, "camera.up", "the up vector")?;
     let projection = match (c.projection, c.diagonal) {
         (ProjectionSpec::Perspective, None) => Projection::Perspective,
         (ProjectionSpec::Perspective, Some(_)) => {
@@ -154,8 +161,8 @@ fn camera(c: &CameraSpec) -> Result<Camera, SceneError> {
             return Err(SceneError::semantic("camera.projection", msg));
         }
     };
-    let focus = c.focus_distance.unwrap_or_else(|| vec3(c.direction).norm());
-    Camera::new(Point3::from(vec3(c.eye)), vec3(c.direction), vec3(c.up), c.width, c.height, c.aperture)
+    let focus = c.focus_distance.as_ref().map_or_else(|| vec3(direction).norm(), |f| *f.first());
+    Camera::new(Point3::from(vec3(eye)), vec3(direction), vec3(up), c.width, c.height, c.aperture)
         .and_then(|cam| cam.with_projection(projection))
         .and_then(|cam| cam.with_lens(c.lens_radius, focus))
         .map_err(|e| SceneError::semantic(camera_field(&e, c), e.to_string()))
@@ -182,8 +189,14 @@ impl SceneFile {
 
     // Everything of `to_world` but the complex: checks the camera, settings,
     // lights and materials and flattens the blocks.
-    fn world_parts(&self) -> Result<WorldParts, SceneError> {
+    pub(crate) fn world_parts(&self) -> Result<WorldParts, SceneError> {
         let camera = camera(&self.camera)?;
+        if let Some(a) = &self.animation {
+            if a.frames[0] > a.frames[1] {
+                let msg = format!("the first frame comes after the last: {:?}", a.frames);
+                return Err(SceneError::semantic("animation.frames", msg));
+            }
+        }
 
         let s = &self.settings;
         colour(&s.ambient, "settings.ambient", "the ambient light")?;
@@ -307,7 +320,7 @@ impl SceneFile {
 }
 
 // A world but for its complex (`SceneFile::world_parts`).
-struct WorldParts {
+pub(crate) struct WorldParts {
     camera: Camera,
     settings: Settings,
     lights: Vec<Light>,
@@ -317,7 +330,7 @@ struct WorldParts {
 
 impl WorldParts {
     // Builds the complex: the last step of `SceneFile::to_world`.
-    fn build(self) -> Result<World, SceneError> {
+    pub(crate) fn build(self) -> Result<World, SceneError> {
         let WorldParts { camera, settings, lights, materials, flat } = self;
         let Flattened { top, definitions, order } = flat;
         let options = ComplexOptions { epsilon: settings.epsilon, ..Default::default() };

@@ -13,7 +13,7 @@ use quadric::nalgebra::{Matrix4, Vector3};
 use quadric::{GeometryError, HalfSpace, Quadric, Solid, Transform};
 
 use crate::error::SceneError;
-use crate::format::{Axis, Entry, MaterialSpec, ObjectSpec, Scale, SceneFile, Step};
+use crate::format::{Axis, Entry, KeyedStep, MaterialSpec, ObjectSpec, Scale, SceneFile, Step};
 use crate::limits::{MAX_DEFINITION_DEPTH, MAX_GROUP_DEPTH};
 use crate::world::{BlockInfo, Triple};
 
@@ -37,19 +37,45 @@ pub(crate) fn finite_triple(t: &Triple, place: impl std::fmt::Display, what: &st
 fn steps_transform(steps: &[Step], place: Place<'_>) -> Result<Transform, SceneError> {
     let mut m = Transform::identity();
     for (i, step) in steps.iter().enumerate() {
-        let t = match step {
-            Step::Translate(v) => Transform::translate(vec3(*v)),
-            Step::Scale(Scale::Uniform(s)) => Transform::scale(*s),
-            Step::Scale(Scale::PerAxis(v)) => Transform::scale_xyz(vec3(*v)),
-            Step::RotateX(d) => Transform::rotate_x_degrees(*d),
-            Step::RotateY(d) => Transform::rotate_y_degrees(*d),
-            Step::RotateZ(d) => Transform::rotate_z_degrees(*d),
-            Step::Matrix(rows) => Transform::from_matrix(&Matrix4::from_fn(|r, c| rows[r][c])),
-        }
-        .map_err(|e| SceneError::semantic(&place.item("transform", i).to_string(), e.to_string()))?;
+        let t = step_transform(step)
+            .map_err(|e| SceneError::semantic(&place.item("transform", i).to_string(), e.to_string()))?;
         m = m.then(&t);
     }
     Ok(m)
+}
+
+/// One step's transform.
+fn step_transform(step: &Step) -> Result<Transform, GeometryError> {
+    match step {
+        Step::Translate(v) => Transform::translate(vec3(*v)),
+        Step::Scale(s) => scale_transform(s),
+        Step::RotateX(d) => Transform::rotate_x_degrees(*d),
+        Step::RotateY(d) => Transform::rotate_y_degrees(*d),
+        Step::RotateZ(d) => Transform::rotate_z_degrees(*d),
+        Step::Matrix(rows) => Transform::from_matrix(&Matrix4::from_fn(|r, c| rows[r][c])),
+        Step::Keyed(k) => keyed_transform(k),
+    }
+}
+
+fn scale_transform(s: &Scale) -> Result<Transform, GeometryError> {
+    match s {
+        Scale::Uniform(s) => Transform::scale(*s),
+        Scale::PerAxis(v) => Transform::scale_xyz(vec3(*v)),
+    }
+}
+
+/// A keyed step's transform at its first key (a scene resolved at a
+/// frame, `SceneFile::at_frame`, has no keyed step). Apart, and not
+/// recursive, so that `step_transform` stays inlined for plain steps.
+#[cold]
+fn keyed_transform(k: &KeyedStep) -> Result<Transform, GeometryError> {
+    match k {
+        KeyedStep::Translate(k) => Transform::translate(vec3(*k.first())),
+        KeyedStep::Scale(k) => scale_transform(k.first()),
+        KeyedStep::RotateX(k) => Transform::rotate_x_degrees(*k.first()),
+        KeyedStep::RotateY(k) => Transform::rotate_y_degrees(*k.first()),
+        KeyedStep::RotateZ(k) => Transform::rotate_z_degrees(*k.first()),
+    }
 }
 
 /// A JSON path (`blocks[2].objects[0].transform[1]`) not yet written out:

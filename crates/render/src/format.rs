@@ -9,6 +9,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::error::SceneError;
+use crate::keys::{Animated, Keyable, Keys};
 use crate::world::{Model, Settings, Triple};
 
 /// The whole scene document.
@@ -50,6 +51,18 @@ pub struct SceneFile {
     /// Blocks and groups in priority order (earlier blocks win where
     /// transparent blocks overlap).
     pub blocks: Vec<Entry>,
+    /// The frames of an animation (`komplex render --frames`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub animation: Option<AnimationSpec>,
+}
+
+/// The animation's default frame range: `{"frames": [A, B]}`, both
+/// included, `A <= B`.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AnimationSpec {
+    /// The first and the last frame that `komplex render --frames` renders.
+    pub frames: [u32; 2],
 }
 
 /// A definition: blocks, groups, instances and lattices in their own frame,
@@ -66,13 +79,14 @@ pub struct DefinitionSpec {
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CameraSpec {
-    /// The eye point `E`.
-    pub eye: Triple,
-    /// The viewing direction `D` (need not be unit length).
-    pub direction: Triple,
-    /// The up vector `U`; only its part orthogonal to `direction` counts.
+    /// The eye point `E` (may be keyed).
+    pub eye: Animated<Triple>,
+    /// The viewing direction `D` (need not be unit length; may be keyed).
+    pub direction: Animated<Triple>,
+    /// The up vector `U`; only its part orthogonal to `direction` counts
+    /// (may be keyed).
     #[serde(default = "default_up")]
-    pub up: Triple,
+    pub up: Animated<Triple>,
     /// Image width in pixels.
     #[serde(default = "default_width")]
     pub width: u32,
@@ -93,9 +107,9 @@ pub struct CameraSpec {
     #[serde(default, skip_serializing_if = "is_zero")]
     pub lens_radius: f64,
     /// Distance from the eye to the plane of sharp focus, measured along
-    /// `direction` (default: the length of `direction`).
+    /// `direction` (default: the length of `direction`; may be keyed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub focus_distance: Option<f64>,
+    pub focus_distance: Option<Animated<f64>>,
 }
 
 /// The camera's projection (docs/model.md §4.5).
@@ -119,8 +133,8 @@ fn is_zero(x: &f64) -> bool {
     *x == 0.0
 }
 
-fn default_up() -> Triple {
-    [0.0, 1.0, 0.0]
+fn default_up() -> Animated<Triple> {
+    Animated::Fixed([0.0, 1.0, 0.0])
 }
 fn default_width() -> u32 {
     640
@@ -368,9 +382,11 @@ fn default_ior() -> f64 {
     1.0
 }
 
-/// One step of a transform list.
-#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema)]
-#[serde(rename_all = "snake_case", deny_unknown_fields)]
+/// One step of a transform list. Every step but `matrix` may be keyed,
+/// `{"translate": {"keys": [...]}}`: it is then [`Step::Keyed`], which
+/// `SceneFile::at_frame` turns into a plain step.
+#[derive(Clone, Debug, Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Step {
     /// Translation by `[x, y, z]`.
     Translate(Triple),
@@ -385,6 +401,179 @@ pub enum Step {
     /// A general affine 4x4 matrix, row-major, last row `[0, 0, 0, 1]`.
     // Boxed: inline, it would make every step 136 bytes instead of 32.
     Matrix(Box<[[f64; 4]; 4]>),
+    /// A step with keys instead of a value (written as the step with its
+    /// keys). Boxed: rare, and a step stays 32 bytes.
+    #[serde(untagged)]
+    Keyed(Box<KeyedStep>),
+}
+
+/// A keyed transform step: its kind and its keys.
+#[derive(Clone, Debug, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum KeyedStep {
+    /// Translation by keyed `[x, y, z]`.
+    Translate(Keys<Triple>),
+    /// Keyed scaling.
+    Scale(Keys<Scale>),
+    /// Rotation about x by keyed degrees.
+    RotateX(Keys<f64>),
+    /// Rotation about y by keyed degrees.
+    RotateY(Keys<f64>),
+    /// Rotation about z by keyed degrees.
+    RotateZ(Keys<f64>),
+}
+
+impl KeyedStep {
+    /// The plain step at `frame` (docs/model.md §6.1).
+    pub fn at(&self, frame: f64) -> Step {
+        match self {
+            KeyedStep::Translate(k) => Step::Translate(k.at(frame)),
+            KeyedStep::Scale(k) => Step::Scale(k.at(frame)),
+            KeyedStep::RotateX(k) => Step::RotateX(k.at(frame)),
+            KeyedStep::RotateY(k) => Step::RotateY(k.at(frame)),
+            KeyedStep::RotateZ(k) => Step::RotateZ(k.at(frame)),
+        }
+    }
+}
+
+// By hand rather than derived: a step's value may be keys, read into
+// `Step::Keyed`. Read as serde's derived reader reads an enum (the same
+// calls, so a plain step costs what it did), with the same messages and
+// places for the same mistakes.
+impl<'de> Deserialize<'de> for Step {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(variant_identifier, rename_all = "snake_case")]
+        enum Kind {
+            Translate,
+            Scale,
+            RotateX,
+            RotateY,
+            RotateZ,
+            Matrix,
+        }
+        const KINDS: &[&str] = &["translate", "scale", "rotate_x", "rotate_y", "rotate_z", "matrix"];
+
+        struct Steps;
+        impl<'de> serde::de::Visitor<'de> for Steps {
+            type Value = Step;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("enum Step")
+            }
+
+            fn visit_enum<A: serde::de::EnumAccess<'de>>(self, data: A) -> Result<Step, A::Error> {
+                use serde::de::VariantAccess;
+                use Animated::{Fixed, Keyed};
+                let keyed = |k: KeyedStep| Step::Keyed(Box::new(k));
+                let (kind, value) = data.variant::<Kind>()?;
+                Ok(match kind {
+                    Kind::Translate => match value.newtype_variant()? {
+                        Fixed(v) => Step::Translate(v),
+                        Keyed(k) => keyed(KeyedStep::Translate(k)),
+                    },
+                    Kind::Scale => match value.newtype_variant()? {
+                        Fixed(v) => Step::Scale(v),
+                        Keyed(k) => keyed(KeyedStep::Scale(k)),
+                    },
+                    Kind::RotateX => match value.newtype_variant()? {
+                        Fixed(v) => Step::RotateX(v),
+                        Keyed(k) => keyed(KeyedStep::RotateX(k)),
+                    },
+                    Kind::RotateY => match value.newtype_variant()? {
+                        Fixed(v) => Step::RotateY(v),
+                        Keyed(k) => keyed(KeyedStep::RotateY(k)),
+                    },
+                    Kind::RotateZ => match value.newtype_variant()? {
+                        Fixed(v) => Step::RotateZ(v),
+                        Keyed(k) => keyed(KeyedStep::RotateZ(k)),
+                    },
+                    Kind::Matrix => Step::Matrix(value.newtype_variant::<PlainMatrix>()?.0),
+                })
+            }
+        }
+        deserializer.deserialize_enum("Step", KINDS, Steps)
+    }
+}
+
+/// A `matrix` step's value: the rows, never keys.
+struct PlainMatrix(Box<[[f64; 4]; 4]>);
+
+impl<'de> Deserialize<'de> for PlainMatrix {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Rows;
+        impl<'de> serde::de::Visitor<'de> for Rows {
+            type Value = PlainMatrix;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an array of length 4")
+            }
+
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, seq: A) -> Result<PlainMatrix, A::Error> {
+                let rows = <[[f64; 4]; 4]>::deserialize(serde::de::value::SeqAccessDeserializer::new(seq))?;
+                Ok(PlainMatrix(Box::new(rows)))
+            }
+
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, _: A) -> Result<PlainMatrix, A::Error> {
+                Err(serde::de::Error::custom(
+                    "a `matrix` step cannot be keyed: key `translate`, `scale` and `rotate_x/y/z` steps instead",
+                ))
+            }
+        }
+        deserializer.deserialize_any(Rows)
+    }
+}
+
+/// The schema of [`Step`]: its JSON form, each value plain or keyed.
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+#[schemars(rename = "Step", description = "One step of a transform list; every step but `matrix` may be keyed.")]
+#[allow(dead_code)]
+enum StepSchema {
+    /// Translation by `[x, y, z]` (may be keyed).
+    Translate(Animated<Triple>),
+    /// Uniform (`s`) or per-axis (`[sx, sy, sz]`) scaling (may be keyed).
+    Scale(Animated<Scale>),
+    /// Rotation about x in degrees, y towards z (may be keyed).
+    RotateX(Animated<f64>),
+    /// Rotation about y in degrees, z towards x (may be keyed).
+    RotateY(Animated<f64>),
+    /// Rotation about z in degrees, x towards y (may be keyed).
+    RotateZ(Animated<f64>),
+    /// A general affine 4x4 matrix, row-major, last row `[0, 0, 0, 1]` (never keyed).
+    Matrix(Box<[[f64; 4]; 4]>),
+}
+
+impl JsonSchema for Step {
+    fn schema_name() -> String {
+        StepSchema::schema_name()
+    }
+
+    fn json_schema(gen: &mut schemars::gen::SchemaGenerator) -> schemars::schema::Schema {
+        StepSchema::json_schema(gen)
+    }
+}
+
+impl Keyable for Scale {
+    const EXPECTING: &'static str = "a number or an array [sx, sy, sz]";
+
+    /// Factor by factor; a uniform scale stays uniform between uniform keys.
+    fn lerp(a: &Scale, b: &Scale, t: f64) -> Scale {
+        match (a, b) {
+            (Scale::Uniform(a), Scale::Uniform(b)) => Scale::Uniform(crate::keys::lerp(*a, *b, t)),
+            _ => Scale::PerAxis(<Triple as Keyable>::lerp(&a.per_axis(), &b.per_axis(), t)),
+        }
+    }
+}
+
+impl Scale {
+    /// The three factors.
+    pub fn per_axis(&self) -> Triple {
+        match self {
+            Scale::Uniform(s) => [*s; 3],
+            Scale::PerAxis(v) => *v,
+        }
+    }
 }
 
 /// A scale factor: one number or one per axis.

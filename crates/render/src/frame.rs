@@ -1,6 +1,7 @@
 //! The render loop: one ray per pixel centre, rows in parallel.
 
 use std::cell::RefCell;
+use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -39,9 +40,11 @@ pub struct Pixel {
     pub error: f32,
 }
 
-/// A rendered image: one plane per output channel (the channels of
-/// [`Pixel`]), each `width * height` samples, row by row from the top-left
-/// pixel. Planes rather than an array of pixels, so that the frame is
+/// A rendered image, or a band of its rows ([`Options::rows`]): one plane
+/// per output channel (the channels of [`Pixel`]), each `width * height`
+/// samples, row by row from the top-left pixel of the band; the band is
+/// rows `first_row .. first_row + height` of an image `image_height` rows
+/// high (a whole image: `first_row` 0, `image_height` = `height`). Planes rather than an array of pixels, so that the frame is
 /// allocated zeroed (its pages mapped lazily, by the worker threads that
 /// write them, not first cleared by one thread) and the EXR writer takes
 /// each channel as it is. Every plane holds `width * height` samples, as
@@ -52,8 +55,12 @@ pub struct Pixel {
 pub struct Frame {
     /// Width in pixels.
     pub width: u32,
-    /// Height in pixels.
+    /// Height in pixels: the rows the frame holds.
     pub height: u32,
+    /// The image row (from the top) of the frame's first row.
+    pub first_row: u32,
+    /// The height of the whole image the frame's rows belong to.
+    pub image_height: u32,
     /// Linear red, green and blue.
     pub rgb: [Vec<f32>; 3],
     /// Coverage ([`Pixel::alpha`]).
@@ -74,10 +81,12 @@ pub struct Frame {
 }
 
 impl Frame {
-    /// A frame of `width × height` pixels, every sample zero. The planes are
-    /// allocated zeroed (`vec![0.0; n]`), so their pages are mapped only
-    /// when first written.
-    fn zeroed(width: u32, height: u32, aovs: bool, adaptive: bool) -> Self {
+    /// A frame of `width × rows.len()` pixels, rows `rows` of an image
+    /// `image_height` high, every sample zero. The planes are allocated
+    /// zeroed (`vec![0.0; n]`), so their pages are mapped only when first
+    /// written.
+    fn zeroed(width: u32, rows: Range<u32>, image_height: u32, aovs: bool, adaptive: bool) -> Self {
+        let height = rows.end - rows.start;
         let n = width as usize * height as usize;
         let f = || vec![0.0f32; n];
         let a = if aovs { n } else { 0 };
@@ -85,6 +94,8 @@ impl Frame {
         Frame {
             width,
             height,
+            first_row: rows.start,
+            image_height,
             rgb: [f(), f(), f()],
             alpha: f(),
             depth: vec![0.0; a],
@@ -151,7 +162,7 @@ impl Frame {
         }
     }
 
-    /// The pixel in row `i` (from the top) and column `j`.
+    /// The pixel in row `i` (from the frame's first row) and column `j`.
     ///
     /// # Panics
     ///
@@ -302,6 +313,12 @@ pub struct Options {
     /// output has none (`komplex bench`): 16 of the frame's 40 bytes a
     /// pixel, so fewer pages to map and fill.
     pub colour_only: bool,
+    /// Only rows `start .. end` of the image (a band, e.g. a tile of
+    /// `komplex render --tile`): the frame holds those rows alone
+    /// ([`Frame::first_row`]), each pixel exactly as in the whole image
+    /// (pixels are keyed by their place in the whole image). `None`: every
+    /// row.
+    pub rows: Option<(u32, u32)>,
 }
 
 /// A pool builder for `threads` workers (default: one per core), the count
@@ -357,6 +374,16 @@ pub fn render_until(
             "the image has {pixels} pixels; at most {MAX_PIXELS} are supported (about 16k x 16k)"
         )));
     }
+    let image_height = world.camera.height();
+    let rows = match options.rows {
+        None => 0..image_height,
+        Some((start, end)) if start < end && end <= image_height => start..end,
+        Some((start, end)) => {
+            return Err(Error::Options(format!(
+                "rows {start}..{end} are not a non-empty band of the image's {image_height} rows"
+            )))
+        }
+    };
     let pool = pool_builder(options.threads)?
         .build()
         .map_err(|e| Error::Options(format!("cannot start worker threads: {e}")))?;
@@ -368,7 +395,8 @@ pub fn render_until(
     // One renderer for the frame, shared by the workers.
     let renderer = Renderer::new(world, options.path);
     let adaptive = renderer.sampled.as_ref().is_some_and(|s| s.noise.is_some());
-    let mut frame = Frame::zeroed(world.camera.width(), world.camera.height(), !options.colour_only, adaptive);
+    let first_row = rows.start;
+    let mut frame = Frame::zeroed(world.camera.width(), rows, image_height, !options.colour_only, adaptive);
     let runs = frame.runs_mut(width * ROWS);
     // Every band of rows is its own task, taken in order from one queue by
     // whichever worker is free: rows differ in cost by orders of
@@ -389,7 +417,7 @@ pub fn render_until(
                 if cancel.load(Ordering::Relaxed) {
                     break;
                 }
-                rays += render_run(&renderer, (b * ROWS) as u32, &mut out);
+                rays += render_run(&renderer, first_row + (b * ROWS) as u32, &mut out);
                 for _ in 0..out.len() / width {
                     progress();
                 }

@@ -20,6 +20,7 @@ use crate::format::{
     Axis, CameraSpec, ColourSpec, CylinderSpec, Entry, LightSpec, MaterialSpec, ObjectSpec, ProjectionSpec, Scale,
     SceneFile, SphereSpec, Step,
 };
+use crate::keys::Animated;
 use crate::sampling::{mix, GOLDEN};
 use crate::world::{Model, Settings};
 
@@ -44,9 +45,9 @@ fn light(position: [f64; 3], c: f64) -> LightSpec {
 
 fn camera(eye: [f64; 3], direction: [f64; 3], aperture: f64) -> CameraSpec {
     CameraSpec {
-        eye,
-        direction,
-        up: [0.0, 1.0, 0.0],
+        eye: Animated::Fixed(eye),
+        direction: Animated::Fixed(direction),
+        up: Animated::Fixed([0.0, 1.0, 0.0]),
         width: 640,
         height: 480,
         aperture,
@@ -112,6 +113,7 @@ pub fn sphereflake(level: u32) -> SceneFile {
             ("ground".into(), material([0.45, 0.45, 0.5], 0.0, 10.0, 0.0)),
         ]),
         blocks,
+        animation: None,
     }
 }
 
@@ -202,6 +204,7 @@ pub fn grid(count: u32, seed: u64) -> SceneFile {
             ("white".into(), material([0.8, 0.8, 0.8], 0.5, 60.0, 0.3)),
         ]),
         blocks,
+        animation: None,
     }
 }
 
@@ -235,6 +238,7 @@ pub fn nested_lattice(outer: u32, inner: u32) -> SceneFile {
     SceneFile {
         schema: None,
         definitions,
+        animation: None,
         camera: camera([0.0, 14.0, side / 2.0 + 10.0], [0.0, -0.3, -1.0], 60.0),
         settings: Settings { ambient: [0.15; 3], background: [0.35, 0.45, 0.6], max_depth: 2, ..Settings::default() },
         lights: vec![light([side / 4.0, 40.0, side / 2.0], 0.8)],

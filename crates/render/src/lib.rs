@@ -25,6 +25,7 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod animate;
 pub mod bench;
 pub mod bsdf;
 pub mod camera;
@@ -38,6 +39,7 @@ mod flatten;
 pub mod format;
 pub mod frame;
 pub mod generate;
+pub mod keys;
 pub mod limits;
 pub mod lobes;
 mod locate;
@@ -51,6 +53,7 @@ pub mod sampling;
 pub mod shade;
 pub mod slice;
 pub mod texture;
+pub mod tiles;
 pub mod trace;
 pub mod warp;
 pub mod world;

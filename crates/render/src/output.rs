@@ -2,9 +2,10 @@
 //! rename it over the target, so a failed or interrupted write never leaves
 //! a partial file or clobbers an existing one.
 
+use std::ffi::OsString;
 use std::fs::File;
 use std::io::BufWriter;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::error::Error;
 
@@ -81,4 +82,62 @@ pub fn write_atomic(
     // On error the temporary file is removed when `tmp` drops.
     tmp.persist(path).map_err(|e| io(e.error))?;
     Ok(())
+}
+
+/// The file of one part of a job: `path` with the frame number, four
+/// digits at least (`.0007`), and the tile (`.tile-2-of-4`) inserted before
+/// the extension: `out/walk.exr`, frame 7, tile 2 of 4 is
+/// `out/walk.0007.tile-2-of-4.exr`. Without either, `path` itself; without
+/// an extension the tags go at the end.
+///
+/// ```
+/// use std::path::Path;
+/// use render::output::part_path;
+/// assert_eq!(part_path(Path::new("out/walk.exr"), Some(7), None), Path::new("out/walk.0007.exr"));
+/// assert_eq!(part_path(Path::new("walk.exr"), Some(7), Some((2, 4))), Path::new("walk.0007.tile-2-of-4.exr"));
+/// ```
+pub fn part_path(path: &Path, frame: Option<u32>, tile: Option<(u32, u32)>) -> PathBuf {
+    let mut tags = String::new();
+    if let Some(k) = frame {
+        tags.push_str(&format!(".{k:04}"));
+    }
+    if let Some((i, n)) = tile {
+        tags.push_str(&format!(".tile-{i}-of-{n}"));
+    }
+    let (Some(stem), false) = (path.file_stem(), tags.is_empty()) else {
+        return path.to_path_buf();
+    };
+    // Built from the stem and extension as they are (not necessarily UTF-8).
+    let mut name = OsString::from(stem);
+    name.push(&tags);
+    if let Some(ext) = path.extension() {
+        name.push(".");
+        name.push(ext);
+    }
+    path.with_file_name(name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn part_paths_insert_the_frame_and_tile_before_the_extension() {
+        for (path, frame, tile, want) in [
+            ("walk.exr", None, None, "walk.exr"),
+            ("walk.exr", Some(0), None, "walk.0000.exr"),
+            ("out/walk.exr", Some(7), None, "out/walk.0007.exr"),
+            ("walk.exr", Some(24), None, "walk.0024.exr"),
+            ("walk.exr", Some(12345), None, "walk.12345.exr"),
+            ("walk.exr", Some(u32::MAX), None, "walk.4294967295.exr"),
+            ("walk.exr", None, Some((2, 4)), "walk.tile-2-of-4.exr"),
+            ("walk.exr", Some(7), Some((0, 16)), "walk.0007.tile-0-of-16.exr"),
+            ("a.b/walk.v2.exr", Some(3), None, "a.b/walk.v2.0003.exr"),
+            ("walk", Some(3), None, "walk.0003"),
+            ("/tmp/.walk", Some(3), None, "/tmp/.walk.0003"),
+            ("walk.png", Some(3), None, "walk.0003.png"),
+        ] {
+            assert_eq!(part_path(Path::new(path), frame, tile), Path::new(want), "{path} {frame:?} {tile:?}");
+        }
+    }
 }

@@ -24,10 +24,22 @@ pub fn encode(linear: f32, exposure: f32) -> u8 {
 
 /// Writes an 8-bit RGB sRGB preview of `frame` to `path`, atomically.
 pub fn write_png(frame: &Frame, path: &Path, exposure: f32) -> Result<(), Error> {
-    let [r, g, b] = &frame.rgb;
+    write_png_planes(path, (frame.width, frame.height), &frame.rgb, exposure)
+}
+
+/// Writes the preview of linear `rgb` planes (`width × height` samples
+/// each, rows from the top) to `path`, atomically: [`write_png`] of
+/// planes not in a [`Frame`] (`komplex merge --png`).
+pub fn write_png_planes(
+    path: &Path,
+    (width, height): (u32, u32),
+    rgb: &[Vec<f32>; 3],
+    exposure: f32,
+) -> Result<(), Error> {
+    let [r, g, b] = rgb;
     let bytes: Vec<u8> =
         r.iter().zip(g).zip(b).flat_map(|((&r, &g), &b)| [r, g, b].map(|c| encode(c, exposure))).collect();
-    let img = image::RgbImage::from_raw(frame.width, frame.height, bytes)
+    let img = image::RgbImage::from_raw(width, height, bytes)
         .ok_or_else(|| Error::Encode { path: path.to_path_buf(), message: "buffer size mismatch".into() })?;
     write_atomic(path, |w| img.write_to(w, image::ImageFormat::Png).map_err(|e| e.to_string()))
 }

@@ -281,7 +281,7 @@ fn measure_renders(files: &[PathBuf], size: (u32, u32), rounds: usize) -> Vec<(S
                 world.complex.set_precision(p);
                 let Ok((_, stats)) = render::frame::render(
                     &world,
-                    render::frame::Options { threads: Some(1), colour_only: false },
+                    render::frame::Options { threads: Some(1), colour_only: false, ..Default::default() },
                     &|| {},
                 ) else {
                     continue;
