@@ -359,6 +359,15 @@ enum Generator {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// An OUTER × OUTER lattice of tiles, each an INNER × INNER lattice of a small ball, on a ground plane.
+    Lattice {
+        /// Tiles along x and z.
+        #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u32).range(1..=65_536))]
+        outer: u32,
+        /// Balls along x and z in a tile.
+        #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=65_536))]
+        inner: u32,
+    },
 }
 
 fn main() -> ExitCode {
@@ -671,7 +680,7 @@ fn export_pov(args: ExportPovArgs) -> Result<(), Error> {
     }
     let mut world = render::load(&scene)?;
     size.apply(&mut world)?;
-    let text = render::pov::export(&world, render::pov::PovOptions { mask });
+    let text = render::pov::export(&world, render::pov::PovOptions { mask })?;
     write_text(output.as_deref(), &text)
 }
 
@@ -735,6 +744,7 @@ fn generate(args: GenerateArgs) -> Result<(), Error> {
     let scene = match args.kind {
         Generator::Sphereflake { level } => render::generate::sphereflake(level),
         Generator::Grid { count, seed } => render::generate::grid(count, seed),
+        Generator::Lattice { outer, inner } => render::generate::nested_lattice(outer, inner),
     };
     write_text(args.output.as_deref(), &render::generate::to_json(&scene))
 }

@@ -876,6 +876,160 @@ fn bad_ray_files_exit_1_and_name_the_place() {
     );
 }
 
+/// A scene with these `definitions` (the inside of the object) and top `blocks`.
+fn with_definitions(definitions: &str, b: &str) -> String {
+    format!(r#"{{ {CAMERA}, "definitions": {{ {definitions} }}, "blocks": [ {b} ] }}"#)
+}
+
+const PIN: &str = r#""pin": { "blocks": [ { "name": "rod", "objects": [ { "sphere": {} } ] } ] }"#;
+
+#[test]
+fn definitions_that_place_themselves_name_the_cycle() {
+    let ball = r#"{ "objects": [ { "sphere": {} } ] }"#;
+    check(
+        &*with_definitions(&format!(r#""a": {{ "blocks": [ {ball}, {{ "instance": "a" }} ] }}"#), ball),
+        1,
+        &["definitions.a.blocks[1], line 1, column", "a definition places itself: definitions.a → definitions.a"],
+    );
+    // Through another definition, from inside a group, by a lattice.
+    let defs = r#""a": { "blocks": [ { "instance": "b" } ] },
+                  "b": { "blocks": [ { "group": "g", "blocks": [ { "lattice": "a", "pitch": [1, 0, 0], "count": [2, 1, 1] } ] } ] }"#;
+    check(
+        &*with_definitions(defs, ball),
+        1,
+        &[
+            "definitions.b.blocks[0].blocks[0], line 2, column",
+            "a definition places itself: definitions.a → definitions.b → definitions.a",
+        ],
+    );
+}
+
+#[test]
+fn instances_and_lattices_are_checked() {
+    check(
+        &*with_definitions(PIN, r#"{ "instance": "pni" }"#),
+        1,
+        &["blocks[0].instance, line 1, column", "unknown definition \"pni\" (did you mean \"pin\"?)"],
+    );
+    check(
+        &*with_definitions(PIN, r#"{ "lattice": "pin", "pitch": [1, 0, 0], "count": [3, 0, 1] }"#),
+        1,
+        &[
+            "blocks[0].count, line 1, column",
+            "lattice of \"pin\": count must be at least 1 on every axis, got [3, 0, 1]",
+        ],
+    );
+    check(
+        &*with_definitions(PIN, r#"{ "lattice": "pin", "pitch": [1e306, 0, 0], "count": [1000, 1, 1] }"#),
+        1,
+        &["blocks[0].pitch, line 1, column", "lattice of \"pin\": the pitch and pitch × (count − 1) must be finite"],
+    );
+    check(
+        &*with_definitions(PIN, r#"{ "lattice": "pin", "count": [10, 1, 1] }"#),
+        1,
+        &["blocks[0].pitch, line 1, column", "lattice of \"pin\" needs `pitch` and `count`"],
+    );
+    check(
+        &*with_definitions(PIN, r#"{ "instance": "pin", "count": [10, 1, 1] }"#),
+        1,
+        &[
+            "blocks[0].count, line 1, column",
+            "instance of \"pin\": `count` belongs on a lattice (`\"lattice\": \"pin\"`)",
+        ],
+    );
+    check(
+        &*with_definitions(PIN, r#"{ "instance": "pin", "material": "x" }"#),
+        1,
+        &["blocks[0].material, line 1, column", "instance of \"pin\": `material` does not belong on an instance"],
+    );
+    check(
+        &*with_definitions(PIN, r#"{ "instance": "pin", "lattice": "pin" }"#),
+        1,
+        &["blocks[0], line 1, column", "an entry has either `instance` or `lattice`, not both"],
+    );
+    check(
+        &*blocks(r#"{ "objects": [ { "sphere": {} } ], "pitch": [1, 0, 0] }"#),
+        1,
+        &[
+            "blocks[0].pitch, line 1, column",
+            "`pitch` belongs on a lattice (`\"lattice\": \"NAME\"`), not on a block or group",
+        ],
+    );
+    check(
+        &*with_definitions(r#""pin": { "blocks": [] }"#, r#"{ "objects": [ { "sphere": {} } ] }"#),
+        1,
+        &["definitions.pin, line 1, column", "definition \"pin\" has no blocks"],
+    );
+}
+
+#[test]
+fn a_lattice_beyond_the_block_ids_fails_at_once() {
+    // 70000 × 70000 elements of a one-block definition: 4.9e9 blocks. Refused
+    // from the numbers, before anything is allocated for them.
+    check(
+        &*with_definitions(PIN, r#"{ "lattice": "pin", "pitch": [1, 1, 0], "count": [70000, 70000, 1] }"#),
+        1,
+        &[
+            "blocks[0], line 1, column",
+            "lattice of \"pin\": the scene would have more than 4294967294 blocks (the most a block id can number): \
+             4900000000 elements of 1 block each",
+        ],
+    );
+    // The sum of entries each within the limit.
+    let half = r#"{ "lattice": "pin", "pitch": [1, 1, 0], "count": [65536, 32768, 1] }"#;
+    check(
+        &*with_definitions(PIN, &format!("{half}, {half}")),
+        1,
+        &["blocks[1], line 1, column", "more than 4294967294 blocks"],
+    );
+}
+
+#[test]
+fn lattices_the_kernel_cannot_walk_and_chains_too_deep_are_refused() {
+    // A pitch <= 0 is placed element by element, up to 65536 elements.
+    check(
+        &*with_definitions(PIN, r#"{ "lattice": "pin", "pitch": [-1, 0, 0], "count": [70000, 1, 1] }"#),
+        1,
+        &[
+            "blocks[0].pitch, line 1, column",
+            "lattice of \"pin\": a lattice with a pitch <= 0 on an axis of several elements is placed element by \
+             element, at most 65536 elements, got 70000",
+        ],
+    );
+    check(
+        &*with_definitions(
+            r#""floor": { "blocks": [ { "objects": [ { "halfspace": [0, 1, 0, 0] } ] } ] }"#,
+            r#"{ "lattice": "floor", "pitch": [1, 0, 0], "count": [2, 1, 1] }"#,
+        ),
+        1,
+        &["blocks[0], line 1, column", "a lattice's definition must be bounded"],
+    );
+    // d00 places d01, which places d02, ... d40: 41 levels.
+    let mut defs: Vec<String> =
+        (0..40).map(|i| format!(r#""d{i:02}": {{ "blocks": [ {{ "instance": "d{:02}" }} ] }}"#, i + 1)).collect();
+    defs.push(r#""d40": { "blocks": [ { "objects": [ { "sphere": {} } ] } ] }"#.into());
+    check(
+        &*with_definitions(&defs.join(", "), r#"{ "instance": "d00" }"#),
+        1,
+        &["definitions.d08.blocks[0], line 1, column", "definitions place each other deeper than 32 levels"],
+    );
+}
+
+#[test]
+fn commands_that_list_every_block_refuse_huge_expansions() {
+    let big = with_definitions(PIN, r#"{ "lattice": "pin", "pitch": [3, 3, 3], "count": [128, 128, 128] }"#);
+    let files: &[(&str, &[u8])] = &[("big.json", big.as_bytes())];
+    let many = "the scene has 2097152 blocks (instances and lattices expanded), more than the";
+    check_with(files, &["volume", "big.json"], 1, &["error: volume: ", many, "1048576 it measures one by one"]);
+    check_with(files, &["overlaps", "big.json"], 1, &["error: overlaps: ", many, "1048576 it measures one by one"]);
+    check_with(
+        files,
+        &["export-pov", "big.json", "-o", "out.pov"],
+        1,
+        &["error: export-pov: ", many, "65536 it writes out one by one"],
+    );
+}
+
 #[test]
 fn bad_tiles_exit_1_and_name_the_option() {
     let tile =

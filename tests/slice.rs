@@ -186,7 +186,7 @@ fn slices_of_the_example_scenes_agree_with_contains_point() {
                 if let Some(owner) = clear_owner(c, p, du, dv) {
                     let k = (j * width + i) as usize;
                     assert_eq!(map.block[k], owner.unwrap_or(0), "{name} {normal:?}: pixel ({i}, {j}) at {p:?}");
-                    let material = owner.map_or(0, |b| w.blocks()[b as usize - 1].material as u32 + 1);
+                    let material = owner.map_or(0, |b| w.block_info(complex::BlockId(b - 1)).material as u32 + 1);
                     assert_eq!(map.material[k], material, "{name} {normal:?}: pixel ({i}, {j})");
                     checked += 1;
                 }

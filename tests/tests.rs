@@ -11,6 +11,7 @@ mod cli;
 mod determinism;
 mod errors;
 mod exr_output;
+mod instances;
 mod interrupt;
 mod measure;
 mod mutations;

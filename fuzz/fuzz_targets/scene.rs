@@ -65,7 +65,7 @@ fn check_world(world: &mut World) {
             assert!(hit.t.is_finite() && hit.t > eps, "pixel ({i}, {j}): t = {} (ε = {eps})", hit.t);
             assert!(hit.point.iter().all(|x| x.is_finite()), "pixel ({i}, {j}): point {:?}", hit.point);
             assert!(hit.normal.iter().all(|x| x.is_finite()), "pixel ({i}, {j}): normal {:?}", hit.normal);
-            assert!(hit.block.index() < world.blocks().len());
+            assert!(hit.block.index() < world.complex.len());
         }
     }
     world.settings.max_depth = world.settings.max_depth.min(FUZZ_MAX_DEPTH);

@@ -134,6 +134,9 @@ impl Hits {
 
 /// Rays per parallel task: `Complex::cast_many`'s chunk.
 const CHUNK: usize = 256;
+
+/// The most blocks `Scene.blocks` lists (instances and lattices expanded).
+const MAX_BLOCKS_LISTED: usize = 1 << 20;
 /// Points per parallel task: `Complex::classify`'s chunk.
 const POINT_CHUNK: usize = 1024;
 
@@ -428,8 +431,17 @@ impl Scene {
     #[getter]
     fn blocks<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         let world = self.world();
+        let n = world.complex.len();
+        if n > MAX_BLOCKS_LISTED {
+            return Err(PyValueError::new_err(format!(
+                "the scene has {n} blocks (instances and lattices expanded), more than the {MAX_BLOCKS_LISTED} \
+                 `blocks` lists"
+            )));
+        }
         let list = PyList::empty(py);
-        for (i, (block, info)) in world.complex.blocks().iter().zip(world.blocks()).enumerate() {
+        for i in 0..n {
+            let id = complex::BlockId(i as u32);
+            let (block, info) = (world.complex.block(id), world.block_info(id));
             let d = PyDict::new(py);
             d.set_item("index", i + 1)?;
             d.set_item("name", block.name())?;
@@ -447,16 +459,16 @@ impl Scene {
         Ok(list)
     }
 
-    /// The number of blocks.
+    /// The number of blocks (instances and lattices expanded).
     fn __len__(&self) -> usize {
-        self.world().complex.blocks().len()
+        self.world().complex.len()
     }
 
     fn __repr__(&self) -> String {
         let world = self.world();
         format!(
             "<komplex.Scene: {} blocks, {}x{} camera>",
-            world.complex.blocks().len(),
+            world.complex.len(),
             world.camera.width(),
             world.camera.height()
         )

@@ -22,6 +22,7 @@ impl SceneFile {
             || c.up.is_keyed()
             || c.focus_distance.as_ref().is_some_and(Animated::is_keyed)
             || self.blocks.iter().any(entry_is_animated)
+            || self.definitions.values().flat_map(|d| &d.blocks).any(entry_is_animated)
     }
 
     /// The static document at `frame`: each keyed value at that frame (held
@@ -49,7 +50,7 @@ impl SceneFile {
     fn resolve(&mut self, frame: f64) -> Result<(), SceneError> {
         self.animation = None;
         resolve_camera(&mut self.camera, frame)?;
-        for entry in &mut self.blocks {
+        for entry in self.blocks.iter_mut().chain(self.definitions.values_mut().flat_map(|d| &mut d.blocks)) {
             resolve_entry(entry, frame);
         }
         Ok(())

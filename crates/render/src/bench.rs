@@ -108,7 +108,7 @@ pub fn measure_runs(
     }
     times.sort_unstable();
     Ok(Measurement {
-        blocks: world.complex.blocks().len(),
+        blocks: world.complex.len(),
         load,
         stages,
         width,

@@ -11,17 +11,18 @@ use crate::world::{Integrator, World};
 /// What `check` found.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Report {
-    /// Number of blocks.
+    /// Number of blocks (of the expansion: each placed copy counts).
     pub blocks: usize,
-    /// Number of solids over all blocks.
-    pub solids: usize,
-    /// Number of transparent blocks.
-    pub transparent: usize,
+    /// Number of solids over all blocks (of the expansion).
+    pub solids: u64,
+    /// Number of transparent blocks (of the expansion).
+    pub transparent: u64,
     /// Number of lights.
     pub lights: usize,
     /// Number of named materials.
     pub materials: usize,
-    /// Box of the bounded blocks, `None` if none is bounded.
+    /// Box of the bounded blocks, `None` if none is bounded; for more than
+    /// 2²⁰ blocks (instances expanded), the complex's box if it is bounded.
     pub bounds: Option<([f64; 3], [f64; 3])>,
     /// The fault tolerance ε in use.
     pub epsilon: f64,
@@ -39,27 +40,52 @@ pub fn check(world: &World) -> Report {
     // A kernel without bounds reports every block as infinite; warning about
     // each block then says nothing, so warn per block only when the kernel
     // bounds at least one.
-    let kernel_bounds = (0..complex.blocks().len()).any(|i| complex.block_aabb(BlockId(i as u32)).is_bounded());
-    for (i, b) in complex.blocks().iter().enumerate() {
-        let id = BlockId(i as u32);
-        let aabb = complex.block_aabb(id);
-        if aabb.is_bounded() {
-            let (lo, hi) = bounds.unwrap_or(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]));
-            bounds = Some(([0, 1, 2].map(|k| lo[k].min(aabb.min[k])), [0, 1, 2].map(|k| hi[k].max(aabb.max[k]))));
-        } else if kernel_bounds {
-            warnings.push(format!("block {} \"{}\" ({}) may be unbounded", i + 1, b.name(), world.blocks()[i].path));
+    if complex.len() <= MAX_BLOCKS_VISITED {
+        let kernel_bounds = (0..complex.len()).any(|i| complex.block_aabb(BlockId(i as u32)).is_bounded());
+        for i in 0..complex.len() {
+            let id = BlockId(i as u32);
+            let b = complex.block(id);
+            let aabb = complex.block_aabb(id);
+            if aabb.is_bounded() {
+                let (lo, hi) = bounds.unwrap_or(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]));
+                bounds = Some(([0, 1, 2].map(|k| lo[k].min(aabb.min[k])), [0, 1, 2].map(|k| hi[k].max(aabb.max[k]))));
+            } else if kernel_bounds {
+                let path = &world.block_info(id).path;
+                warnings.push(format!("block {} \"{}\" ({path}) may be unbounded", i + 1, b.name()));
+            }
+            if b.is_transparent() {
+                let m = world.block_material(id);
+                if m.transmit == Vector3::zeros() {
+                    warnings.push(format!(
+                        "block {} \"{}\" is transparent but its material \"{}\" has transmit 0",
+                        i + 1,
+                        b.name(),
+                        m.name
+                    ));
+                }
+            }
         }
-        if b.is_transparent() {
-            let m = world.block_material(id);
-            if m.transmit == Vector3::zeros() {
+    } else {
+        // Too many blocks to visit: the box of the whole complex, and the
+        // warnings once per block the file writes, by name and place.
+        let aabb = complex.aabb();
+        bounds = aabb.is_bounded().then(|| (aabb.min.into(), aabb.max.into()));
+        for (b, info) in world.written_blocks() {
+            let m = &world.materials()[info.material];
+            if b.is_transparent() && m.transmit == Vector3::zeros() {
                 warnings.push(format!(
-                    "block {} \"{}\" is transparent but its material \"{}\" has transmit 0",
-                    i + 1,
+                    "block \"{}\" ({}) is transparent but its material \"{}\" has transmit 0",
                     b.name(),
+                    info.path,
                     m.name
                 ));
             }
         }
+        warnings.push(format!(
+            "{} blocks: more than {MAX_BLOCKS_VISITED}, so the bounds are the complex's box (unknown if it is \
+             unbounded) and blocks are not checked one by one",
+            complex.len()
+        ));
     }
     let eye = world.camera.eye();
     if let Some(id) = complex.contains_point(&eye) {
@@ -79,7 +105,14 @@ pub fn check(world: &World) -> Report {
             }
         }
     }
-    opaque_overlaps(world, &mut warnings);
+    if complex.len() <= MAX_BLOCKS_VISITED {
+        opaque_overlaps(world, &mut warnings);
+    } else {
+        warnings.push(format!(
+            "overlaps between opaque blocks not checked: more than {MAX_BLOCKS_VISITED} blocks (run komplex overlaps \
+             on a part of the scene)"
+        ));
+    }
     // The path integrator is also lit by emissive blocks and the background.
     let path_lit = world.settings.integrator == Integrator::Path
         && (world.materials().iter().any(|m| m.emission.max() > 0.0)
@@ -88,7 +121,7 @@ pub fn check(world: &World) -> Report {
         warnings.push("the scene has no lights: only ambient light, reflection and refraction".into());
     }
     let used: Vec<bool> = (0..world.materials().len())
-        .map(|m| world.blocks().iter().any(|b| b.material == m || b.solid_materials.contains(&m)))
+        .map(|m| world.written_blocks().any(|(_, b)| b.material == m || b.solid_materials.contains(&m)))
         .collect();
     // The last material is the built-in default.
     for (m, mat) in world.materials().iter().enumerate().take(world.materials().len() - 1) {
@@ -97,9 +130,9 @@ pub fn check(world: &World) -> Report {
         }
     }
     Report {
-        blocks: complex.blocks().len(),
-        solids: complex.blocks().iter().map(|b| b.solids().len()).sum(),
-        transparent: complex.blocks().iter().filter(|b| b.is_transparent()).count(),
+        blocks: complex.len(),
+        solids: world.sum_over_blocks(|b, _| b.solids().len() as u64),
+        transparent: world.sum_over_blocks(|b, _| u64::from(b.is_transparent())),
         lights: world.lights.len(),
         materials: world.materials().len() - 1,
         bounds,
@@ -108,6 +141,11 @@ pub fn check(world: &World) -> Report {
         warnings,
     }
 }
+
+/// The most blocks (of the expansion) `check` visits one by one, for the
+/// bounds and the per-block warnings; a scene with more instances gets the
+/// complex's box and the warnings once per block the file writes.
+const MAX_BLOCKS_VISITED: usize = 1 << 20;
 
 /// Pairs of opaque blocks whose boxes overlap that `check` measures at
 /// most; beyond it the check is skipped (and says so).
@@ -156,19 +194,19 @@ fn opaque_overlaps(world: &World, warnings: &mut Vec<String>) {
 
 impl fmt::Display for Report {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let n = |count: usize, what: &str| format!("{count} {what}{}", if count == 1 { "" } else { "s" });
+        let n = |count: u64, what: &str| format!("{count} {what}{}", if count == 1 { "" } else { "s" });
         writeln!(
             f,
             "{} ({} transparent), {}, {}, {}",
-            n(self.blocks, "block"),
+            n(self.blocks as u64, "block"),
             self.transparent,
             n(self.solids, "solid"),
-            n(self.lights, "light"),
-            n(self.materials, "material")
+            n(self.lights as u64, "light"),
+            n(self.materials as u64, "material")
         )?;
         match self.bounds {
             Some((lo, hi)) => writeln!(f, "bounds: {lo:?} .. {hi:?}")?,
-            None => writeln!(f, "bounds: unknown (the kernel gives no block a finite box)")?,
+            None => writeln!(f, "bounds: unknown (no block has a finite box, or too many blocks to visit)")?,
         }
         writeln!(f, "image: {}x{}, epsilon {:e}", self.size.0, self.size.1, self.epsilon)?;
         for w in &self.warnings {

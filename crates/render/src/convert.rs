@@ -4,18 +4,19 @@
 //! column when the text is at hand.
 
 use std::path::Path;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use complex::{Block, Complex, ComplexOptions};
+use complex::{Complex, ComplexError, ComplexOptions, Placement};
 use quadric::nalgebra::{Point3, Vector3};
 
 use crate::camera::{Camera, CameraError, Projection};
 use crate::error::{Error, SceneError};
-use crate::flatten::{finite_triple, vec3};
+use crate::flatten::{finite_triple, vec3, Flat, Flattened, Member};
 use crate::format::{CameraSpec, ColourSpec, ProjectionSpec, SceneFile, TextureSpec, VeinSpec};
 use crate::limits::{MAX_BOUNCES, MAX_SPP};
 use crate::texture::{Bump, Texture};
-use crate::world::{BlockInfo, Light, Material, Model, Settings, Textures, Triple, World};
+use crate::world::{BlockInfo, Item, Layout, Light, Material, Model, Settings, Textures, Triple, World};
 
 /// Reads and converts a scene file.
 pub fn load(path: &Path) -> Result<World, Error> {
@@ -366,11 +367,11 @@ impl SceneFile {
             textures: None,
         });
 
-        let (blocks, infos) = self.flattened(default_material)?;
-        if blocks.is_empty() {
+        let flat = self.flattened(default_material)?;
+        if flat.top.len == 0 {
             return Err(SceneError::semantic("blocks", "the scene has no blocks"));
         }
-        Ok(WorldParts { camera, settings: s.clone(), lights, materials, blocks, infos })
+        Ok(WorldParts { camera, settings: s.clone(), lights, materials, flat })
     }
 }
 
@@ -380,18 +381,95 @@ pub(crate) struct WorldParts {
     settings: Settings,
     lights: Vec<Light>,
     materials: Vec<Material>,
-    blocks: Vec<Block>,
-    infos: Vec<BlockInfo>,
+    flat: Flattened,
 }
 
 impl WorldParts {
     // Builds the complex: the last step of `SceneFile::to_world`.
     pub(crate) fn build(self) -> Result<World, SceneError> {
-        let WorldParts { camera, settings, lights, materials, blocks, infos } = self;
-        let complex = Complex::new(blocks, ComplexOptions { epsilon: settings.epsilon, ..Default::default() })
-            .map_err(|e| SceneError::semantic("blocks", e.to_string()))?;
-        Ok(World::new(camera, settings, lights, materials, complex, infos))
+        let WorldParts { camera, settings, lights, materials, flat } = self;
+        let Flattened { top, definitions, order } = flat;
+        let options = ComplexOptions { epsilon: settings.epsilon, ..Default::default() };
+        if top.is_plain() {
+            // No instances: the blocks as they are, the path of every scene before definitions existed.
+            let blocks = top.members.into_iter().filter_map(|m| match m {
+                Member::Block(b) => Some(b),
+                Member::Placed(_) => None,
+            });
+            let complex =
+                Complex::new(blocks.collect(), options).map_err(|e| SceneError::semantic("blocks", e.to_string()))?;
+            return Ok(World::new(camera, settings, lights, materials, complex, vec![top.infos], None));
+        }
+        // Each definition once, after those it places, keyed by its index + 1
+        // (the top list is key 0), so that `Complex::resolve` names the table
+        // of block infos a block's comes from.
+        let mut built: Vec<Option<Arc<Complex>>> = vec![None; definitions.len()];
+        let mut tables: Vec<Vec<BlockInfo>> = vec![vec![]; definitions.len() + 1];
+        let mut layout = Layout { lists: vec![vec![]; definitions.len() + 1], complexes: vec![None], uniform: false };
+        let mut definitions: Vec<Option<Flat>> = definitions.into_iter().map(Some).collect();
+        for d in order {
+            let Some(list) = definitions[d].take() else { continue };
+            let key = u32::try_from(d + 1).map_err(|_| SceneError::semantic("definitions", "too many definitions"))?;
+            layout.lists[d + 1] = items(&list.members);
+            let complex = assemble(list.members, &built, ComplexOptions { key, ..options })?;
+            built[d] = Some(Arc::new(complex));
+            tables[d + 1] = list.infos;
+        }
+        layout.lists[0] = items(&top.members);
+        let complex = assemble(top.members, &built, options)?;
+        tables[0] = top.infos;
+        layout.complexes.extend(built);
+        Ok(World::new(camera, settings, lights, materials, complex, tables, Some(layout)))
     }
+}
+
+/// A list's entries as its layout holds them.
+fn items(members: &[Member]) -> Vec<Item> {
+    members
+        .iter()
+        .map(|m| match m {
+            Member::Block(_) => Item::Block,
+            Member::Placed(p) => {
+                Item::Placed { key: p.definition as u32 + 1, elements: p.count.iter().map(|&n| u64::from(n)).product() }
+            }
+        })
+        .collect()
+}
+
+/// `Complex::assemble` of a flattened list whose placed definitions are
+/// `built`; a kernel error about a placement names its entry.
+fn assemble(
+    members: Vec<Member>,
+    built: &[Option<Arc<Complex>>],
+    options: ComplexOptions,
+) -> Result<Complex, SceneError> {
+    let mut places = Vec::with_capacity(members.len());
+    let members: Vec<complex::Member> = members
+        .into_iter()
+        .map(|m| match m {
+            Member::Block(b) => {
+                places.push(None);
+                complex::Member::Block(b)
+            }
+            Member::Placed(p) => {
+                let definition = built[p.definition].clone().unwrap_or_else(|| unreachable!("built before its places"));
+                places.push(Some(p.place));
+                complex::Member::Placed(Placement {
+                    definition,
+                    transform: p.transform,
+                    pitch: p.pitch,
+                    count: p.count,
+                })
+            }
+        })
+        .collect();
+    Complex::assemble(members, options).map_err(|e| match e {
+        ComplexError::BadPlacement { index, what } => match places.get(index).cloned().flatten() {
+            Some(place) => SceneError::semantic(&place, what),
+            None => SceneError::semantic("blocks", what),
+        },
+        e => SceneError::semantic("blocks", e.to_string()),
+    })
 }
 
 #[cfg(test)]
@@ -412,6 +490,63 @@ mod tests {
         assert_eq!(w.lights[0].specular, Vector3::new(1.0, 0.0, 0.0));
     }
 
+    /// A scene of nested lattices and instances in rotated groups, with a
+    /// textured block in a definition.
+    const INSTANCED: &str = r#"{ "camera": { "eye": [0, 0, 50], "direction": [0, 0, -1] },
+      "materials": { "a": { "diffuse": { "checker": {} } }, "b": {} },
+      "definitions": {
+        "pin": { "blocks": [ { "name": "rod", "material": "a", "objects": [ { "sphere": { "radius": 0.3 } } ] },
+                             { "objects": [ { "sphere": { "radius": 0.2, "center": [0, 0.4, 0] } } ], "material": "b" } ] },
+        "row": { "blocks": [ { "group": "g", "transform": [ { "rotate_z": 20 } ], "blocks": [
+                   { "lattice": "pin", "pitch": [1, 0, 0], "count": [3, 1, 1], "transform": [ { "scale": 0.8 } ] } ] },
+                 { "name": "end", "objects": [ { "sphere": { "radius": 0.25, "center": [3.5, 0, 0] }, "material": "a" },
+                                              { "sphere": { "radius": 0.3, "center": [3.5, 0, 0] } } ] } ] } },
+      "blocks": [ { "name": "first", "objects": [ { "sphere": { "center": [-4, 0, 0] } } ] },
+                  { "group": "h", "transform": [ { "rotate_y": 30 }, { "translate": [0, 1, 0] } ], "blocks": [
+                    { "lattice": "row", "pitch": [0, 1.2, 0.7], "count": [1, 3, 2] } ] },
+                  { "instance": "pin", "transform": [ { "scale": 2 }, { "translate": [4, -3, 0] } ] } ] }"#;
+
+    #[test]
+    fn placed_blocks_have_the_infos_and_frames_of_the_expansion() {
+        let world = SceneFile::load_str(INSTANCED).unwrap();
+        assert!(world.is_instanced() && world.complex.is_assembled());
+        let scene = SceneFile::from_json(INSTANCED).unwrap();
+        let (blocks, infos) = scene.flattened(scene.materials.len()).unwrap().expanded();
+        // first, 6 rows of (3 pins of 2 blocks and an end), the big pin's 2.
+        assert_eq!((world.complex.len(), blocks.len()), (1 + 6 * 7 + 2, 1 + 6 * 7 + 2));
+        for (i, (block, info)) in blocks.iter().zip(&infos).enumerate() {
+            let id = complex::BlockId(i as u32);
+            let got = world.block_info(id);
+            assert_eq!(
+                (&got.path, got.material, &got.solid_materials),
+                (&info.path, info.material, &info.solid_materials)
+            );
+            assert_eq!(world.complex.block(id).name(), block.name());
+            assert!(std::ptr::eq(world.block_material(id), &world.materials()[info.material]), "block {i}");
+            for j in 0..block.solids().len() {
+                let m = info.solid_materials[j];
+                assert!(std::ptr::eq(world.surface_material(id, j as u32), &world.materials()[m]), "block {i}");
+            }
+            // The frame maps a point of the placed block to the same point of the block's own frame.
+            match (world.frame(id), info.frame.as_deref().copied()) {
+                (None, None) => {}
+                (Some(got), Some(want)) => {
+                    for p in [Point3::new(0.3, -1.0, 2.0), Point3::new(-4.0, 5.0, 0.5)] {
+                        assert!((got.apply_point(&p) - want.apply_point(&p)).norm() < 1e-12, "block {i}");
+                    }
+                }
+                (got, want) => panic!("block {i}: {got:?} against {want:?}"),
+            }
+        }
+        assert_eq!(world.written_blocks().count(), 1 + 1 + 2, "the top's own block, row's end and pin's 2");
+        assert_eq!(world.sum_over_blocks(|b, _| b.solids().len() as u64), 45 + 6);
+        let rods = world.select_blocks(|b, _| b.name() == "rod", 100).unwrap();
+        let want: Vec<u32> = (0..blocks.len() as u32).filter(|&i| blocks[i as usize].name() == "rod").collect();
+        assert_eq!(rods.iter().map(|b| b.0).collect::<Vec<_>>(), want);
+        assert_eq!(world.select_blocks(|b, _| b.name() == "rod", 18), None);
+        assert_eq!(world.select_blocks(|b, _| b.name() == "first", 1), Some(vec![complex::BlockId(0)]));
+    }
+
     #[test]
     fn errors_are_located_alike_whether_the_text_is_kept_or_read_again() {
         let dir = tempfile::tempdir().unwrap();
@@ -426,7 +561,8 @@ mod tests {
         std::fs::write(&path, format!(r#"{{ {CAMERA}, "blocks": [ {{ "objects": [ {{ "sphere": {{}} }} ] }} ] }}"#))
             .unwrap();
         let (a, b) = (load_keeping(&path, usize::MAX).unwrap().0, load_keeping(&path, 0).unwrap().0);
-        assert_eq!(a.blocks(), b.blocks());
+        let infos = |w: &World| w.written_blocks().map(|(_, info)| info.clone()).collect::<Vec<_>>();
+        assert_eq!(infos(&a), infos(&b));
     }
 
     #[test]

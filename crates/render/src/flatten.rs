@@ -1,6 +1,8 @@
-//! Groups to blocks: the `blocks` list of a scene flattened depth-first
-//! into `complex::Block`s and their [`BlockInfo`]s, so block priority is
-//! document order. Transforms compose in list order (the first step acts
+//! Groups to blocks: each `blocks` list of a scene (the top one and each
+//! definition's) flattened depth-first into `complex::Block`s with their
+//! [`BlockInfo`]s and placed definitions ([`Member`]), so block priority is
+//! document order. Definitions are flattened once each, in their own frame,
+//! after those they place; a cycle of definitions is an error. Transforms compose in list order (the first step acts
 //! first); a block's transform acts after its objects' own, and enclosing
 //! groups' transforms after that, innermost first.
 
@@ -12,7 +14,7 @@ use quadric::{GeometryError, HalfSpace, Quadric, Solid, Transform};
 
 use crate::error::SceneError;
 use crate::format::{Axis, Entry, KeyedStep, MaterialSpec, ObjectSpec, Scale, SceneFile, Step};
-use crate::limits::MAX_GROUP_DEPTH;
+use crate::limits::{MAX_DEFINITION_DEPTH, MAX_GROUP_DEPTH};
 use crate::world::{BlockInfo, Triple};
 
 /// A triple as a vector.
@@ -109,40 +111,296 @@ impl std::fmt::Display for Place<'_> {
     }
 }
 
+/// A member of a flattened block list: a block, or a definition placed
+/// once or on a lattice (`Member::Placed`).
+#[derive(Clone, Debug)]
+pub(crate) enum Member {
+    /// A block, in the frame of the list it belongs to.
+    Block(Block),
+    /// A placed definition.
+    Placed(Placed),
+}
+
+/// A definition placed by an `instance` or `lattice` entry.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Placed {
+    /// The definition's index (`SceneFile::definitions` in key order).
+    pub definition: usize,
+    /// The definition's frame to the list's frame, after the lattice
+    /// offset: the entry's transform, then its groups', innermost first.
+    pub transform: Transform,
+    /// The lattice's step along x, y and z (zero for an instance).
+    pub pitch: Vector3<f64>,
+    /// Elements along x, y and z (`[1, 1, 1]` for an instance).
+    pub count: [u32; 3],
+    /// The entry's JSON path, for an error the kernel finds.
+    pub place: String,
+}
+
+/// A block list flattened: its members in document order, the infos of its
+/// own blocks (`Member::Block`s) in order, and how many blocks its
+/// expansion has.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Flat {
+    pub members: Vec<Member>,
+    pub infos: Vec<BlockInfo>,
+    pub len: u64,
+}
+
+impl Flat {
+    /// Whether it holds blocks only (no instances or lattices).
+    pub fn is_plain(&self) -> bool {
+        self.members.iter().all(|m| matches!(m, Member::Block(_)))
+    }
+}
+
+/// The most blocks the expansion of a scene may have: a block id numbers
+/// them in a `u32` whose largest value stands for none.
+pub(crate) const MAX_BLOCKS: u64 = u32::MAX as u64 - 1;
+
+/// The most elements of a lattice placed one by one (a lattice with a pitch
+/// <= 0 on an axis of several elements).
+pub(crate) const MAX_ELEMENTS_PLACED_ONE_BY_ONE: u64 = 1 << 16;
+
+/// The flattened scene: the top list and every definition's.
+#[derive(Debug, Default)]
+pub(crate) struct Flattened {
+    /// The top `blocks` list.
+    pub top: Flat,
+    /// Per definition (in key order), its list; definitions are built in
+    /// `order`, each after those it places.
+    pub definitions: Vec<Flat>,
+    /// The definitions' indices, each after every definition it places.
+    pub order: Vec<usize>,
+}
+
+#[cfg(test)]
+impl Flattened {
+    /// The explicit expansion: every placed definition's blocks moved to
+    /// each of its places, in document order, `i` fastest, then `j`, then
+    /// `k`; each block's info with its frame composed. The blocks of a
+    /// placed definition keep their names and paths. The oracle of the
+    /// world's placed blocks (`convert`'s tests).
+    pub(crate) fn expanded(&self) -> (Vec<Block>, Vec<BlockInfo>) {
+        let mut out = (vec![], vec![]);
+        self.expand_into(&self.top, &Transform::identity(), &mut out);
+        out
+    }
+
+    /// Appends the blocks of `list` moved by `to` (its frame to the world).
+    fn expand_into(&self, list: &Flat, to: &Transform, out: &mut (Vec<Block>, Vec<BlockInfo>)) {
+        let mut infos = list.infos.iter();
+        for m in &list.members {
+            match m {
+                Member::Block(b) => {
+                    let solids = b.solids().iter().map(|s| s.transformed(to)).collect();
+                    let block = Block::new(b.name(), solids, b.opacity(), b.material())
+                        .unwrap_or_else(|e| unreachable!("a valid block stays valid: {e}"));
+                    let mut info = infos.next().cloned().unwrap_or_else(|| unreachable!("an info per block"));
+                    info.frame = info.frame.map(|f| Box::new(to.inverse().then(&f)));
+                    out.0.push(block);
+                    out.1.push(info);
+                }
+                Member::Placed(p) => {
+                    let [nx, ny, nz] = p.count;
+                    for k in 0..nz {
+                        for j in 0..ny {
+                            for i in 0..nx {
+                                let offset = Vector3::new(
+                                    f64::from(i) * p.pitch.x,
+                                    f64::from(j) * p.pitch.y,
+                                    f64::from(k) * p.pitch.z,
+                                );
+                                let at = Transform::translate(offset)
+                                    .unwrap_or_else(|_| unreachable!("a finite offset"))
+                                    .then(&p.transform)
+                                    .then(to);
+                                self.expand_into(&self.definitions[p.definition], &at, out);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
 impl SceneFile {
-    /// The blocks and their infos, groups flattened depth-first.
+    /// The definitions in an order where each comes after those it places;
+    /// a reference to an unknown definition or a cycle is an error at the
+    /// entry that makes it.
+    fn definition_order(&self) -> Result<Vec<usize>, SceneError> {
+        let names: Vec<&str> = self.definitions.keys().map(String::as_str).collect();
+        let mut refs: Vec<Vec<(usize, String)>> = Vec::with_capacity(names.len());
+        for (name, d) in &self.definitions {
+            let place = format!("definitions{}.blocks", crate::locate::key_step(name));
+            let mut out = vec![];
+            references(&d.blocks, &place, &names, 0, &mut out)?;
+            refs.push(out);
+        }
+        // Depth-first with an explicit stack: a chain of definitions as
+        // long as the file allows must not overflow the thread's stack.
+        #[derive(Clone, Copy, PartialEq)]
+        enum State {
+            New,
+            Open,
+            Done,
+        }
+        let mut state = vec![State::New; names.len()];
+        let mut order = Vec::with_capacity(names.len());
+        for root in 0..names.len() {
+            if state[root] != State::New {
+                continue;
+            }
+            state[root] = State::Open;
+            let mut stack = vec![(root, 0)];
+            while let Some((d, next)) = stack.last_mut() {
+                let d = *d;
+                let Some((t, place)) = refs[d].get(*next) else {
+                    state[d] = State::Done;
+                    order.push(d);
+                    stack.pop();
+                    continue;
+                };
+                *next += 1;
+                match state[*t] {
+                    State::New => {
+                        state[*t] = State::Open;
+                        stack.push((*t, 0));
+                    }
+                    State::Open => {
+                        let from = stack.iter().position(|(s, _)| s == t).unwrap_or(0);
+                        let cycle: Vec<String> = stack[from..]
+                            .iter()
+                            .map(|(s, _)| *s)
+                            .chain([*t])
+                            .map(|s| format!("definitions{}", crate::locate::key_step(names[s])))
+                            .collect();
+                        return Err(SceneError::semantic(
+                            place,
+                            format!("a definition places itself: {}", cycle.join(" → ")),
+                        ));
+                    }
+                    State::Done => {}
+                }
+            }
+        }
+        // Levels of placement below each definition, settled in `order`.
+        let mut depth = vec![0; names.len()];
+        for &d in &order {
+            for (t, place) in &refs[d] {
+                depth[d] = depth[d].max(depth[*t] + 1);
+                if depth[d] >= MAX_DEFINITION_DEPTH {
+                    let msg = format!("definitions place each other deeper than {MAX_DEFINITION_DEPTH} levels");
+                    return Err(SceneError::semantic(place, msg));
+                }
+            }
+        }
+        Ok(order)
+    }
+
+    /// The blocks and their infos, groups flattened depth-first, and the
+    /// definitions, each flattened once in its own frame.
+    pub(crate) fn flattened(&self, default_material: usize) -> Result<Flattened, SceneError> {
+        // Per material index (the default last), whether its blocks keep their frame.
+        let textured: Vec<bool> = self.materials.values().map(MaterialSpec::is_textured).chain([false]).collect();
+        let order = self.definition_order()?;
+        let names: Vec<&str> = self.definitions.keys().map(String::as_str).collect();
+        let mut lens: Vec<Option<u64>> = vec![None; names.len()];
+        let mut definitions: Vec<Flat> = vec![Flat::default(); names.len()];
+        let lists = Lists { materials: &self.materials, textured: &textured, default_material, names: &names };
+        for &d in &order {
+            let (name, spec) = self.definitions.iter().nth(d).unwrap_or_else(|| unreachable!("a definition's index"));
+            let place = format!("definitions{}", crate::locate::key_step(name));
+            if spec.blocks.is_empty() {
+                return Err(SceneError::semantic(&place, format!("definition \"{name}\" has no blocks")));
+            }
+            let flat = lists.flatten(&spec.blocks, &format!("{place}.blocks"), Some(name), &lens)?;
+            lens[d] = Some(flat.len);
+            definitions[d] = flat;
+        }
+        let top = lists.flatten(&self.blocks, "blocks", None, &lens)?;
+        Ok(Flattened { top, definitions, order })
+    }
+}
+
+/// The definitions `entries` place (at `place`), in document order, with
+/// the place of the entry that places each; an unknown name is an error.
+/// Groups deeper than flattening allows are not searched: flattening stops
+/// there with its own error.
+fn references(
+    entries: &[Entry],
+    place: &str,
+    names: &[&str],
+    depth: usize,
+    out: &mut Vec<(usize, String)>,
+) -> Result<(), SceneError> {
+    for (i, e) in entries.iter().enumerate() {
+        let here = format!("{place}[{i}]");
+        if let Some(name) = e.instance.as_deref().or(e.lattice.as_deref()) {
+            let key = if e.instance.is_some() { "instance" } else { "lattice" };
+            out.push((definition_index(name, names, &format!("{here}.{key}"))?, here));
+        } else if let (Some(children), true) = (&e.blocks, depth < MAX_GROUP_DEPTH) {
+            references(children, &format!("{here}.blocks"), names, depth + 1, out)?;
+        }
+    }
+    Ok(())
+}
+
+/// The index of definition `name`, or an error at `place` with the nearest name.
+fn definition_index(name: &str, names: &[&str], place: &str) -> Result<usize, SceneError> {
+    names.iter().position(|n| *n == name).ok_or_else(|| {
+        let hint = crate::error::nearest(name, names.iter().copied())
+            .map(|n| format!(" (did you mean \"{n}\"?)"))
+            .unwrap_or_default();
+        SceneError::semantic(place, format!("unknown definition \"{name}\"{hint}"))
+    })
+}
+
+/// What flattening any list reads.
+struct Lists<'a> {
+    materials: &'a BTreeMap<String, MaterialSpec>,
+    /// Per material index, whether it is textured (`MaterialSpec::is_textured`).
+    textured: &'a [bool],
+    default_material: usize,
+    /// The definitions' names, in key order.
+    names: &'a [&'a str],
+}
+
+impl Lists<'_> {
+    /// Flattens the list `entries` at `place` (`definition`: the definition
+    /// it is, `None` for the top list); `lens`: the number of blocks of each
+    /// definition already flattened.
     ///
-    /// A long `blocks` list is cut into runs flattened in parallel, each
-    /// knowing how many blocks come before it (for the default names
-    /// `block N`); the runs are joined in order and the first error in
+    /// A long list is cut into runs flattened in parallel, each knowing
+    /// how many blocks of the expansion come before it (for the default
+    /// names `block N`); the runs are joined in order and the first error in
     /// document order is returned, so the result is the sequential one.
-    pub(crate) fn flattened(&self, default_material: usize) -> Result<(Vec<Block>, Vec<BlockInfo>), SceneError> {
+    fn flatten(
+        &self,
+        entries: &[Entry],
+        place: &str,
+        definition: Option<&str>,
+        lens: &[Option<u64>],
+    ) -> Result<Flat, SceneError> {
         use rayon::prelude::*;
         /// Top-level entries per run (a run takes about a millisecond).
         const RUN: usize = 1024;
-        // Per material index (the default last), whether its blocks keep their frame.
-        let textured: Vec<bool> = self.materials.values().map(MaterialSpec::is_textured).chain([false]).collect();
-        let flattener = |before| Flattener {
-            materials: &self.materials,
-            textured: &textured,
-            default_material,
-            before,
-            blocks: vec![],
-            infos: vec![],
-        };
-        if self.blocks.len() < 2 * RUN {
+        let flattener = |before| Flattener { lists: self, lens, definition, before, flat: Flat::default() };
+        if entries.len() < 2 * RUN {
             let mut flat = flattener(0);
-            flat.entries(&self.blocks, 0, "blocks", &[])?;
-            return Ok((flat.blocks, flat.infos));
+            flat.entries(entries, 0, place, &[])?;
+            return Ok(flat.flat);
         }
-        let mut before = 0;
-        let runs: Vec<(usize, &[Entry], usize)> = self
-            .blocks
+        let mut before = 0u64;
+        let runs: Vec<(usize, &[Entry], u64)> = entries
             .chunks(RUN)
             .enumerate()
             .map(|(r, run)| {
                 let first = before;
-                before += run.iter().map(|e| block_count(e, 0)).sum::<usize>();
+                before = before.saturating_add(
+                    run.iter().map(|e| block_count(e, 0, self.names, lens)).fold(0, u64::saturating_add),
+                );
                 (r * RUN, run, first)
             })
             .collect();
@@ -150,46 +408,55 @@ impl SceneFile {
             .into_par_iter()
             .map(|(first, run, before)| {
                 let mut flat = flattener(before);
-                flat.entries(run, first, "blocks", &[]).map(|()| flat)
+                flat.entries(run, first, place, &[]).map(|()| flat)
             })
             .collect();
-        let (mut blocks, mut infos) = (Vec::with_capacity(before), Vec::with_capacity(before));
+        let mut all = Flat { members: Vec::with_capacity(entries.len()), infos: vec![], len: 0 };
         for run in runs {
-            let run = run?;
-            blocks.extend(run.blocks);
-            infos.extend(run.infos);
+            let run = run?.flat;
+            all.members.extend(run.members);
+            all.infos.extend(run.infos);
+            all.len += run.len;
         }
-        Ok((blocks, infos))
+        Ok(all)
     }
 }
 
 /// How many blocks flattening `e` yields if it is valid (an invalid entry
 /// stops flattening, so what it counts does not matter).
-fn block_count(e: &Entry, depth: usize) -> usize {
+fn block_count(e: &Entry, depth: usize, names: &[&str], lens: &[Option<u64>]) -> u64 {
+    if let Some(name) = e.instance.as_deref().or(e.lattice.as_deref()) {
+        let len = names.iter().position(|n| *n == name).and_then(|d| lens[d]).unwrap_or(0);
+        let count = if e.lattice.is_some() { e.count.unwrap_or([0; 3]) } else { [1; 3] };
+        return count.iter().fold(len, |n, &c| n.saturating_mul(u64::from(c)));
+    }
     match (&e.objects, &e.blocks) {
         (Some(_), None) => 1,
-        (None, Some(children)) if depth < MAX_GROUP_DEPTH => children.iter().map(|c| block_count(c, depth + 1)).sum(),
+        (None, Some(children)) if depth < MAX_GROUP_DEPTH => {
+            children.iter().map(|c| block_count(c, depth + 1, names, lens)).fold(0, u64::saturating_add)
+        }
         _ => 0,
     }
 }
 
 struct Flattener<'a> {
-    materials: &'a BTreeMap<String, MaterialSpec>,
-    /// Per material index, whether it is textured (`MaterialSpec::is_textured`).
-    textured: &'a [bool],
-    default_material: usize,
-    /// Blocks that come before this flattener's first (in other runs).
-    before: usize,
-    blocks: Vec<Block>,
-    infos: Vec<BlockInfo>,
+    lists: &'a Lists<'a>,
+    /// Per definition, its number of blocks once flattened.
+    lens: &'a [Option<u64>],
+    /// The definition whose list this is (`None`: the top list).
+    definition: Option<&'a str>,
+    /// Blocks of the expansion that come before this flattener's first (in other runs).
+    before: u64,
+    flat: Flat,
 }
 
 impl Flattener<'_> {
     /// The index of material `name`; `place` and `owner` (`block "x"`) name
     /// the reference in the error.
     fn material(&self, name: &str, place: Place<'_>, owner: &dyn std::fmt::Display) -> Result<usize, SceneError> {
-        self.materials.keys().position(|k| k == name).ok_or_else(|| {
-            let hint = crate::error::nearest(name, self.materials.keys().map(String::as_str))
+        let materials = self.lists.materials;
+        materials.keys().position(|k| k == name).ok_or_else(|| {
+            let hint = crate::error::nearest(name, materials.keys().map(String::as_str))
                 .map(|n| format!(" (did you mean \"{n}\"?)"))
                 .unwrap_or_default();
             SceneError::semantic(&place.to_string(), format!("{owner}: unknown material \"{name}\"{hint}"))
@@ -206,6 +473,15 @@ impl Flattener<'_> {
             // Every block keeps its path (`BlockInfo::path`), so it is written out here, once.
             let here = format!("{place}[{i}]");
             let own = steps_transform(&e.transform, Place::Text(&here))?;
+            if e.instance.is_some() || e.lattice.is_some() {
+                self.placed(e, &here, own, outer)?;
+                continue;
+            }
+            if e.pitch.is_some() || e.count.is_some() {
+                let key = if e.pitch.is_some() { "pitch" } else { "count" };
+                let msg = format!("`{key}` belongs on a lattice (`\"lattice\": \"NAME\"`), not on a block or group");
+                return Err(SceneError::semantic(&format!("{here}.{key}"), msg));
+            }
             match (&e.objects, &e.blocks) {
                 (Some(_), Some(_)) => {
                     return Err(SceneError::semantic(
@@ -249,6 +525,100 @@ impl Flattener<'_> {
         Ok(())
     }
 
+    /// An `instance` or `lattice` entry at `here`, its own transform `own`.
+    fn placed(&mut self, e: &Entry, here: &str, own: Transform, outer: &[Transform]) -> Result<(), SceneError> {
+        let (kind, name) = match (&e.instance, &e.lattice) {
+            (Some(name), None) => ("instance", name),
+            (None, Some(name)) => ("lattice", name),
+            _ => return Err(SceneError::semantic(here, "an entry has either `instance` or `lattice`, not both")),
+        };
+        let extra = [
+            (e.objects.is_some(), "objects"),
+            (e.blocks.is_some(), "blocks"),
+            (e.group.is_some(), "group"),
+            (e.name.is_some(), "name"),
+            (e.material.is_some(), "material"),
+            (e.transparent.is_some(), "transparent"),
+        ];
+        if let Some((_, key)) = extra.iter().find(|(set, _)| *set) {
+            let article = if kind == "instance" { "an" } else { "a" };
+            let msg = format!("{kind} of \"{name}\": `{key}` does not belong on {article} {kind}");
+            return Err(SceneError::semantic(&format!("{here}.{key}"), msg));
+        }
+        let definition = definition_index(name, self.lists.names, &format!("{here}.{kind}"))?;
+        let (pitch, count) = match (kind, e.pitch, e.count) {
+            ("instance", None, None) => (Vector3::zeros(), [1, 1, 1]),
+            ("instance", ..) => {
+                let key = if e.pitch.is_some() { "pitch" } else { "count" };
+                let msg = format!("instance of \"{name}\": `{key}` belongs on a lattice (`\"lattice\": \"{name}\"`)");
+                return Err(SceneError::semantic(&format!("{here}.{key}"), msg));
+            }
+            (_, Some(pitch), Some(count)) => {
+                // The last element's offset too, so that every element's is finite.
+                let extent: Triple = std::array::from_fn(|a| pitch[a] * f64::from(count[a].max(1) - 1));
+                if !(pitch.iter().chain(&extent).all(|x| x.is_finite())) {
+                    let msg = format!("lattice of \"{name}\": the pitch and pitch × (count − 1) must be finite");
+                    return Err(SceneError::semantic(&format!("{here}.pitch"), msg));
+                }
+                if count.contains(&0) {
+                    let msg = format!("lattice of \"{name}\": count must be at least 1 on every axis, got {count:?}");
+                    return Err(SceneError::semantic(&format!("{here}.count"), msg));
+                }
+                (vec3(pitch), count)
+            }
+            (_, pitch, _) => {
+                let key = if pitch.is_none() { "pitch" } else { "count" };
+                let msg = format!("lattice of \"{name}\" needs `pitch` and `count`");
+                return Err(SceneError::semantic(&format!("{here}.{key}"), msg));
+            }
+        };
+        // Definitions are flattened after those they place (`definition_order`).
+        let len = self.lens[definition].unwrap_or_else(|| unreachable!("definition \"{name}\" not yet flattened"));
+        let elements = count.iter().map(|&n| u64::from(n)).product::<u64>();
+        let total = elements.checked_mul(len).and_then(|n| n.checked_add(self.before + self.flat.len));
+        match total {
+            Some(total) if total <= MAX_BLOCKS => self.flat.len += elements * len,
+            _ => {
+                let each = if len == 1 { "1 block".to_string() } else { format!("{len} blocks") };
+                let msg = format!(
+                    "{kind} of \"{name}\": the scene would have more than {MAX_BLOCKS} blocks \
+                     (the most a block id can number): {elements} elements of {each} each"
+                );
+                return Err(SceneError::semantic(here, msg));
+            }
+        }
+        let transform = outer.iter().fold(own, |m, g| m.then(g));
+        let place = here.to_string();
+        if (0..3).all(|a| count[a] == 1 || pitch[a] > 0.0) {
+            self.flat.members.push(Member::Placed(Placed { definition, transform, pitch, count, place }));
+            return Ok(());
+        }
+        // The kernel walks a lattice's cells along increasing coordinates, so
+        // a lattice with a pitch <= 0 on an axis of several elements is
+        // placed element by element, in the same order.
+        if elements > MAX_ELEMENTS_PLACED_ONE_BY_ONE {
+            let msg = format!(
+                "lattice of \"{name}\": a lattice with a pitch <= 0 on an axis of several elements is placed \
+                 element by element, at most {MAX_ELEMENTS_PLACED_ONE_BY_ONE} elements, got {elements} \
+                 (a positive pitch and a mirroring transform place any number)"
+            );
+            return Err(SceneError::semantic(&format!("{here}.pitch"), msg));
+        }
+        for k in 0..count[2] {
+            for j in 0..count[1] {
+                for i in 0..count[0] {
+                    let offset = Vector3::new(f64::from(i) * pitch.x, f64::from(j) * pitch.y, f64::from(k) * pitch.z);
+                    // The offset is finite (the extent was checked above).
+                    let step = Transform::translate(offset).map_err(|e| SceneError::semantic(here, e.to_string()))?;
+                    let transform = step.then(&transform);
+                    let (pitch, count, place) = (Vector3::zeros(), [1, 1, 1], place.clone());
+                    self.flat.members.push(Member::Placed(Placed { definition, transform, pitch, count, place }));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// `here`: the block's path, kept in its [`BlockInfo`].
     fn block(
         &mut self,
@@ -258,7 +628,11 @@ impl Flattener<'_> {
         own: Transform,
         outer: &[Transform],
     ) -> Result<(), SceneError> {
-        let name = e.name.clone().unwrap_or_else(|| format!("block {}", self.before + self.blocks.len() + 1));
+        let number = self.before + self.flat.len + 1;
+        let name = e.name.clone().unwrap_or_else(|| match self.definition {
+            None => format!("block {number}"),
+            Some(d) => format!("block {number} of {d}"),
+        });
         // The owner and object names of error messages, written out only for an error.
         let owner = Owner { block: &name, object: None };
         let who = |j: usize| Owner { block: &name, object: Some(j + 1) };
@@ -268,7 +642,7 @@ impl Flattener<'_> {
         let place = Place::Text(&here);
         let material = match &e.material {
             Some(m) => self.material(m, place.key("material"), &owner)?,
-            None => self.default_material,
+            None => self.lists.default_material,
         };
         let placement = outer.iter().fold(own, |m, g| m.then(g));
         let mut solids = Vec::with_capacity(objects.len());
@@ -297,13 +671,14 @@ impl Flattener<'_> {
         let opacity = if e.transparent.unwrap_or(false) { Opacity::Transparent } else { Opacity::Opaque };
         let block = Block::new(name, solids, opacity, MaterialKey(material as u32))
             .map_err(|err| SceneError::semantic(&here, err.to_string()))?;
-        self.blocks.push(block);
+        self.flat.members.push(Member::Block(block));
+        self.flat.len += 1;
         // Only a textured block keeps its frame: untextured scenes neither
         // store nor read one.
-        let textured = |m: usize| self.textured.get(m).copied().unwrap_or(false);
+        let textured = |m: usize| self.lists.textured.get(m).copied().unwrap_or(false);
         let frame =
             (textured(material) || solid_materials.iter().any(|&m| textured(m))).then(|| Box::new(placement.inverse()));
-        self.infos.push(BlockInfo { material, solid_materials, path: here, frame });
+        self.flat.infos.push(BlockInfo { material, solid_materials, path: here, frame });
         Ok(())
     }
 }
@@ -507,14 +882,14 @@ mod tests {
         );
         let names: Vec<&str> = w.complex.blocks().iter().map(|b| b.name()).collect();
         assert_eq!(names, ["one", "two", "three", "block 4"]);
-        assert_eq!(w.blocks()[2].path, "blocks[1].blocks[1].blocks[0]");
+        assert_eq!(w.block_info(complex::BlockId(2)).path, "blocks[1].blocks[1].blocks[0]");
         let id = complex::BlockId(3);
         assert_eq!(w.surface_material(id, 0).name, "a");
         assert_eq!(w.surface_material(id, 1).name, "b");
         assert_eq!(w.block_material(id).name, "b");
         assert_eq!(w.block_material(complex::BlockId(1)).name, "(default)");
         // The table built with the world answers as the block infos do.
-        for (i, info) in w.blocks().iter().enumerate() {
+        for (i, (_, info)) in w.written_blocks().enumerate() {
             for j in 0..info.solid_materials.len() + 1 {
                 let m = info.solid_materials.get(j).copied().unwrap_or(info.material);
                 let got = w.surface_material(complex::BlockId(i as u32), j as u32);
@@ -540,20 +915,20 @@ mod tests {
         assert!(err.contains("groups nest deeper than 100 levels") && err.starts_with("blocks[0].blocks[0]"), "{err}");
     }
 
-    /// Flattens `scene` in one run, as scenes shorter than two runs are.
+    /// Flattens `scene`'s top list in one run, as lists shorter than two runs are.
     fn sequential(scene: &SceneFile) -> Result<(Vec<Block>, Vec<BlockInfo>), SceneError> {
         let materials = &scene.materials;
         let textured: Vec<bool> = materials.values().map(MaterialSpec::is_textured).chain([false]).collect();
-        let mut flat = Flattener {
-            materials,
-            textured: &textured,
-            default_material: materials.len(),
-            before: 0,
-            blocks: vec![],
-            infos: vec![],
-        };
+        let lists = Lists { materials, textured: &textured, default_material: materials.len(), names: &[] };
+        let mut flat = Flattener { lists: &lists, lens: &[], definition: None, before: 0, flat: Flat::default() };
         flat.entries(&scene.blocks, 0, "blocks", &[])?;
-        Ok((flat.blocks, flat.infos))
+        Ok(blocks_of(flat.flat))
+    }
+
+    /// The blocks and infos of a list without placements.
+    fn blocks_of(flat: Flat) -> (Vec<Block>, Vec<BlockInfo>) {
+        let blocks = flat.members.into_iter().filter_map(|m| if let Member::Block(b) = m { Some(b) } else { None });
+        (blocks.collect(), flat.infos)
     }
 
     #[test]
@@ -572,7 +947,7 @@ mod tests {
         let text = format!(r#"{{ {CAMERA}, "materials": {{ "a": {{}} }}, "blocks": [] }}"#);
         let mut scene = SceneFile::from_json(&text).unwrap();
         scene.blocks = entries;
-        let ours = scene.flattened(scene.materials.len()).unwrap();
+        let ours = blocks_of(scene.flattened(scene.materials.len()).unwrap().top);
         let one = sequential(&scene).unwrap();
         let names = |b: &[Block]| b.iter().map(|b| b.name().to_string()).collect::<Vec<_>>();
         assert_eq!(names(&ours.0), names(&one.0));

@@ -44,6 +44,10 @@ pub struct SceneFile {
     /// Named materials, referenced by blocks and objects.
     #[serde(default)]
     pub materials: BTreeMap<String, MaterialSpec>,
+    /// Named lists of blocks, placed by `instance` and `lattice` entries
+    /// (docs/scene-format.md, "Definitions, instances and lattices").
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub definitions: BTreeMap<String, DefinitionSpec>,
     /// Blocks and groups in priority order (earlier blocks win where
     /// transparent blocks overlap).
     pub blocks: Vec<Entry>,
@@ -59,6 +63,15 @@ pub struct SceneFile {
 pub struct AnimationSpec {
     /// The first and the last frame that `komplex render --frames` renders.
     pub frames: [u32; 2],
+}
+
+/// A definition: blocks, groups, instances and lattices in their own frame,
+/// placed by `instance` and `lattice` entries.
+#[derive(Clone, Debug, Default, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DefinitionSpec {
+    /// Blocks, groups, instances and lattices in priority order.
+    pub blocks: Vec<Entry>,
 }
 
 /// The camera of docs/model.md §4: a pinhole by default, a thin lens with
@@ -620,8 +633,9 @@ impl<'de> Deserialize<'de> for Scale {
     }
 }
 
-/// An entry of a `blocks` list: a block (with `objects`) or a group (with
-/// `group` and nested `blocks`).
+/// An entry of a `blocks` list: a block (with `objects`), a group (with
+/// `group` and nested `blocks`), an instance of a definition (`instance`)
+/// or a lattice of them (`lattice`, `pitch` and `count`).
 #[derive(Clone, Debug, Default, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Entry {
@@ -643,8 +657,24 @@ pub struct Entry {
     /// Nested blocks and groups (groups only).
     #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "exact_some")]
     pub blocks: Option<Vec<Entry>>,
-    /// Steps applied after the objects' own transforms (blocks) or after
-    /// everything inside (groups).
+    /// The name of the definition placed once (instances only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub instance: Option<String>,
+    /// The name of the definition placed on a lattice (lattices only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lattice: Option<String>,
+    /// The lattice's step along x, y and z: element `(i, j, k)` is the
+    /// definition moved by `(i·px, j·py, k·pz)`, then by `transform`
+    /// (lattices only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pitch: Option<Triple>,
+    /// The lattice's number of elements along x, y and z, each at least 1
+    /// (lattices only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub count: Option<[u32; 3]>,
+    /// Steps applied after the objects' own transforms (blocks), after
+    /// everything inside (groups), or after the definition (instances) and
+    /// each element's lattice offset (lattices).
     #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "exact")]
     pub transform: Vec<Step>,
 }
@@ -779,7 +809,8 @@ impl SceneFile {
 ///
 /// Generated from the serde types, plus the two rules the types cannot
 /// express: an object has exactly one shape key, and a `blocks` entry is
-/// either a block (`objects`) or a group (`group` and `blocks`).
+/// either a block (`objects`), a group (`group` and `blocks`), an instance
+/// (`instance`) or a lattice (`lattice`, `pitch` and `count`).
 pub fn schema_json() -> String {
     let schema = schemars::schema_for!(SceneFile);
     let mut value = serde_json::to_value(&schema).unwrap_or_default();
@@ -800,7 +831,10 @@ pub fn schema_json() -> String {
             obj.insert("oneOf".into(), one_of(&shapes));
         }
         if let Some(entry) = defs.get_mut("Entry").and_then(|o| o.as_object_mut()) {
-            entry.insert("oneOf".into(), one_of(&[&["objects"], &["group", "blocks"]]));
+            entry.insert(
+                "oneOf".into(),
+                one_of(&[&["objects"], &["group", "blocks"], &["instance"], &["lattice", "pitch", "count"]]),
+            );
         }
     }
     // Serialising a JSON value cannot fail.

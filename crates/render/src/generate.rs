@@ -1,5 +1,5 @@
-//! Benchmark scene generators: Haines' sphereflake and a grid of
-//! random bounded blocks, as scene documents.
+//! Benchmark scene generators: Haines' sphereflake, a grid of random
+//! bounded blocks and a nested lattice of balls, as scene documents.
 //!
 //! ```
 //! let flake = render::generate::sphereflake(2);
@@ -7,6 +7,8 @@
 //! assert_eq!(world.complex.blocks().len(), 91 + 1); // 1 + 9 + 81 spheres and the ground
 //! let grid = render::generate::grid(10, 7);
 //! assert_eq!(grid.to_world().unwrap().complex.blocks().len(), 10);
+//! let field = render::generate::nested_lattice(1000, 30);
+//! assert_eq!(field.to_world().unwrap().complex.len(), 1000 * 1000 * 30 * 30 + 1);
 //! ```
 
 use std::collections::BTreeMap;
@@ -102,6 +104,7 @@ pub fn sphereflake(level: u32) -> SceneFile {
     }
     SceneFile {
         schema: None,
+        definitions: BTreeMap::new(),
         camera: camera([4.2, 4.4, 6.8], [-2.1, -1.7, -3.4], 45.0),
         settings: Settings { ambient: [0.1; 3], background: [0.08, 0.1, 0.16], max_depth: 4, ..Settings::default() },
         lights: vec![light([4.0, 6.0, 5.0], 0.6), light([-5.0, 5.0, 2.0], 0.35), light([1.0, 8.0, -4.0], 0.25)],
@@ -190,6 +193,7 @@ pub fn grid(count: u32, seed: u64) -> SceneFile {
     let s = f64::from(side);
     SceneFile {
         schema: None,
+        definitions: BTreeMap::new(),
         camera: camera([2.2 * s, 1.6 * s, 2.6 * s], [-1.7 * s, -1.1 * s, -2.1 * s], 50.0),
         settings: Settings { ambient: [0.15; 3], background: [0.05, 0.05, 0.08], max_depth: 2, ..Settings::default() },
         lights: vec![light([3.0 * s, 4.0 * s, 2.0 * s], 0.7), light([-s, 2.0 * s, 3.0 * s], 0.3)],
@@ -204,6 +208,51 @@ pub fn grid(count: u32, seed: u64) -> SceneFile {
     }
 }
 
+/// A nested lattice over a ground plane: an `outer × outer` lattice of
+/// tiles, each an `inner × inner` lattice of a small ball, so
+/// `outer² · inner²` balls (a billion at 1000 and 30) and the ground. The
+/// camera looks over the field from above one corner's middle.
+pub fn nested_lattice(outer: u32, inner: u32) -> SceneFile {
+    let ball = Entry {
+        name: Some("ball".into()),
+        material: Some("ball".into()),
+        objects: Some(vec![ObjectSpec {
+            sphere: Some(Box::new(SphereSpec { radius: Some(0.35), center: Some([0.0, 0.35, 0.0]) })),
+            ..ObjectSpec::default()
+        }]),
+        ..Entry::default()
+    };
+    let lattice = |name: &str, pitch: f64, n: u32, transform: Vec<Step>| Entry {
+        lattice: Some(name.into()),
+        pitch: Some([pitch, 0.0, pitch]),
+        count: Some([n, 1, n]),
+        transform,
+        ..Entry::default()
+    };
+    let (m, side) = (f64::from(inner), f64::from(outer) * f64::from(inner));
+    let definitions = BTreeMap::from([
+        ("ball".to_string(), crate::format::DefinitionSpec { blocks: vec![ball] }),
+        ("tile".to_string(), crate::format::DefinitionSpec { blocks: vec![lattice("ball", 1.0, inner, vec![])] }),
+    ]);
+    let centre = Step::Translate([0.5 - side / 2.0, 0.0, 0.5 - side / 2.0]);
+    SceneFile {
+        schema: None,
+        definitions,
+        animation: None,
+        camera: camera([0.0, 14.0, side / 2.0 + 10.0], [0.0, -0.3, -1.0], 60.0),
+        settings: Settings { ambient: [0.15; 3], background: [0.35, 0.45, 0.6], max_depth: 2, ..Settings::default() },
+        lights: vec![light([side / 4.0, 40.0, side / 2.0], 0.8)],
+        materials: BTreeMap::from([
+            ("ball".into(), material([0.75, 0.35, 0.2], 0.4, 40.0, 0.0)),
+            ("ground".into(), material([0.45, 0.45, 0.5], 0.0, 10.0, 0.0)),
+        ]),
+        blocks: vec![
+            lattice("tile", m, outer, vec![centre]),
+            block("ground".into(), "ground", vec![halfspace([0.0, 1.0, 0.0, 0.0])], vec![]),
+        ],
+    }
+}
+
 /// The document as JSON with one block per line: compact for 100,000
 /// blocks, still diffable.
 pub fn to_json(scene: &SceneFile) -> String {
@@ -212,7 +261,7 @@ pub fn to_json(scene: &SceneFile) -> String {
     let head = serde_json::to_value(&head).unwrap_or_default();
     let mut out = String::with_capacity(scene.blocks.len() * 200 + 1000);
     out.push_str("{\n");
-    for key in ["$schema", "camera", "settings", "lights", "materials"] {
+    for key in ["$schema", "camera", "settings", "lights", "materials", "definitions"] {
         if let Some(v) = head.get(key) {
             out.push_str(&format!("  {}: {},\n", serde_json::Value::from(key), v));
         }

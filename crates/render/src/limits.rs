@@ -17,6 +17,11 @@ pub const MAX_THREADS: usize = 1024;
 /// in code could, and flattening recurses once per level.
 pub const MAX_GROUP_DEPTH: usize = 100;
 
+/// The deepest nesting of definitions (a definition placing one placing
+/// another ...): each level of a query recurses into the definition it
+/// places, on the calling thread's stack.
+pub const MAX_DEFINITION_DEPTH: usize = 32;
+
 /// The largest `settings.max_depth`: shading recurses once per bounce, so an
 /// unbounded depth could overflow a worker thread's stack.
 pub const MAX_BOUNCES: u32 = 64;

@@ -117,9 +117,26 @@ fn box6(b: &Aabb) -> Option<[f64; 6]> {
     b.is_bounded().then(|| [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z])
 }
 
+/// The most blocks (instances expanded) `volume` and `overlaps` measure:
+/// they report every block, or every pair of blocks, one by one.
+pub const MAX_BLOCKS_MEASURED: usize = 1 << 20;
+
+/// An error if `world` has more blocks than [`MAX_BLOCKS_MEASURED`].
+fn measurable(world: &World, command: &str) -> Result<(), Error> {
+    let n = world.complex.len();
+    if n <= MAX_BLOCKS_MEASURED {
+        return Ok(());
+    }
+    Err(Error::Options(format!(
+        "{command}: the scene has {n} blocks (instances and lattices expanded), more than the \
+         {MAX_BLOCKS_MEASURED} it measures one by one"
+    )))
+}
+
 /// Measures every block's volume, its own and the union's.
 pub fn volumes(world: &World, options: &MeasureOptions) -> Result<VolumeReport, Error> {
     let kernel = options.kernel()?;
+    measurable(world, "volume")?;
     let complex = &world.complex;
     let v = complex.volumes(&kernel).map_err(|e| Error::Options(e.to_string()))?;
     let blocks = v
@@ -132,7 +149,7 @@ pub fn volumes(world: &World, options: &MeasureOptions) -> Result<VolumeReport, 
             let (own_volume, own_error) = split(b.own);
             BlockVolumeReport {
                 index: i as u32 + 1,
-                name: complex.blocks()[i].name().to_string(),
+                name: complex.block(BlockId(i as u32)).name().to_string(),
                 volume,
                 error,
                 own_volume,
@@ -255,6 +272,7 @@ pub struct OverlapsReport {
 /// Finds every pair of blocks whose own regions share a positive volume.
 pub fn overlaps(world: &World, options: &MeasureOptions) -> Result<OverlapsReport, Error> {
     let kernel = VolumeOptions { max_pairs: usize::MAX - 1, ..options.kernel()? };
+    measurable(world, "overlaps")?;
     let complex = &world.complex;
     let found = complex.overlaps(&kernel).map_err(|e| Error::Options(e.to_string()))?;
     let name = |id: BlockId| complex.block(id).name().to_string();

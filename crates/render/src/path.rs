@@ -18,7 +18,7 @@ use crate::lobes::Lobes;
 use crate::sampling::Sampler;
 use crate::shade::{facing_normal, is_zero, weigh, Event, Rgb, Scratch, Shader};
 use crate::warp::{sample_uniform_cone, sample_uniform_sphere, uniform_cone_pdf, Basis};
-use crate::world::{Material, World};
+use crate::world::{BlockInfo, Material, World};
 
 /// The dimensions of a sample the camera reads: `0, 1` the point of the
 /// pixel, `2, 3` the point of the lens.
@@ -116,6 +116,10 @@ fn power_heuristic(a: f64, b: f64) -> f64 {
     a * a / (a * a + b * b)
 }
 
+/// The most placed copies of emissive blocks of definitions that light
+/// samples aim at (docs/rendering.md, "Light sampling").
+pub const MAX_EMITTERS: usize = 1 << 16;
+
 /// The path integrator of one world.
 #[derive(Clone, Debug)]
 pub struct PathTracer<'w> {
@@ -133,13 +137,21 @@ impl<'w> PathTracer<'w> {
     pub fn new(world: &'w World, options: PathOptions) -> Self {
         let complex = &world.complex;
         let mut emitters = Vec::new();
-        for (index, info) in world.blocks().iter().enumerate() {
-            let id = BlockId(index as u32);
+        let power = |info: &BlockInfo| {
             let materials = std::iter::once(info.material).chain(info.solid_materials.iter().copied());
-            let power = materials.map(|m| world.materials()[m].emission.max()).fold(0.0, f64::max);
-            if !(power > 0.0 && power.is_finite()) {
-                continue;
-            }
+            materials.map(|m| world.materials()[m].emission.max()).fold(0.0, f64::max)
+        };
+        let emissive = |info: &BlockInfo| power(info) > 0.0 && power(info).is_finite();
+        // Placed copies of emissive blocks are light samples only up to
+        // `MAX_EMITTERS`; beyond, those of definitions are left to BSDF
+        // samples (their light density is 0, so MIS gives BSDF samples the
+        // full weight there and the estimate stays unbiased).
+        let ids = world.select_blocks(|_, info| emissive(info), MAX_EMITTERS).unwrap_or_else(|| {
+            let top = |info: &BlockInfo| info.path.starts_with("blocks");
+            world.select_blocks(|_, info| top(info) && emissive(info), usize::MAX).unwrap_or_default()
+        });
+        for id in ids {
+            let power = power(world.block_info(id));
             if let Some((centre, radius)) = bounding_sphere(world, id) {
                 emitters.push(Emitter { block: id, centre, radius, chance: power * radius * radius, upto: 0.0 });
             }
@@ -348,7 +360,18 @@ impl<'w> PathTracer<'w> {
 fn bounding_sphere(world: &World, id: BlockId) -> Option<(Point3<f64>, f64)> {
     let aabb = world.complex.block_aabb(id);
     let mut best = aabb.center().map(|c| (c, aabb.size().norm() / 2.0)).filter(|(_, r)| r.is_finite());
-    for solid in world.complex.block(id).solids() {
+    // A placed block's solids are in its definition's frame: a sphere there
+    // maps to one around the placed copy with the radius scaled by the
+    // largest stretch of the placement (its linear part's spectral norm).
+    let resolved = world.complex.resolve(id);
+    let to_world = |(c, r): (Point3<f64>, f64)| match &resolved.to_world {
+        None => (c, r),
+        Some(t) => {
+            let stretch = SymmetricEigen::new(t.linear().transpose() * t.linear()).eigenvalues.max().sqrt();
+            (t.apply_point(&c), r * stretch * (1.0 + 1e-12))
+        }
+    };
+    for solid in resolved.block.solids() {
         let Solid::Quadric(q) = solid else { continue };
         if !q.is_finite() {
             continue;
@@ -361,8 +384,9 @@ fn bounding_sphere(world: &World, id: BlockId) -> Option<(Point3<f64>, f64)> {
         let level = -(c + b.dot(&centre));
         let lowest = SymmetricEigen::new(a).eigenvalues.min();
         let radius = (level / lowest).sqrt();
+        let (centre, radius) = to_world((Point3::from(centre), radius));
         if radius.is_finite() && radius > 0.0 && best.is_none_or(|(_, r)| radius < r) {
-            best = Some((Point3::from(centre), radius));
+            best = Some((centre, radius));
         }
     }
     best

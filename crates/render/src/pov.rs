@@ -27,7 +27,7 @@
 //! let text = r#"{ "camera": { "eye": [0, 0, 5], "direction": [0, 0, -1], "width": 8, "height": 6 },
 //!                 "blocks": [ { "objects": [ { "sphere": { "radius": 2 } } ] } ] }"#;
 //! let world = render::format::SceneFile::load_str(text).unwrap();
-//! let pov = render::pov::export(&world, render::pov::PovOptions { mask: true });
+//! let pov = render::pov::export(&world, render::pov::PovOptions { mask: true }).unwrap();
 //! assert!(pov.contains("quadric {") && pov.contains("ambient 1 diffuse 0"));
 //! ```
 
@@ -37,6 +37,7 @@ use quadric::nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 use quadric::{HalfSpace, Quadric, Solid};
 
 use crate::camera::Projection;
+use crate::error::Error;
 use crate::world::{Material, Model, World};
 
 /// What to write.
@@ -68,12 +69,25 @@ fn v3(v: &Vector3<f64>) -> String {
     format!("<{}, {}, {}>", Num(v.x), Num(v.y), Num(v.z))
 }
 
-/// The scene as POV-Ray 3.7 source.
-pub fn export(world: &World, options: PovOptions) -> String {
+/// The most blocks of a scene with instances the export writes: it writes
+/// every placed copy as a block of its own.
+pub const MAX_BLOCKS_EXPORTED: usize = 1 << 16;
+
+/// The scene as POV-Ray 3.7 source. A scene with instances is written
+/// expanded, each placed block on its own, up to [`MAX_BLOCKS_EXPORTED`]
+/// blocks; more are an error.
+pub fn export(world: &World, options: PovOptions) -> Result<String, Error> {
+    let n = world.complex.len();
+    if world.is_instanced() && n > MAX_BLOCKS_EXPORTED {
+        return Err(Error::Options(format!(
+            "export-pov: the scene has {n} blocks (instances and lattices expanded), more than the \
+             {MAX_BLOCKS_EXPORTED} it writes out one by one"
+        )));
+    }
     let mut out = String::new();
     // Writing to a String cannot fail.
     let _ = write_scene(&mut out, world, options);
-    out
+    Ok(out)
 }
 
 fn write_scene(out: &mut String, world: &World, options: PovOptions) -> std::fmt::Result {
@@ -119,9 +133,25 @@ fn write_scene(out: &mut String, world: &World, options: PovOptions) -> std::fmt
         }
     }
     writeln!(out, "union {{")?;
-    for (b, block) in world.complex.blocks().iter().enumerate() {
+    for b in 0..world.complex.len() {
         let id = b as u32 + 1;
         let key = complex::BlockId(b as u32);
+        // A placed block, moved from its definition's frame to the world.
+        let resolved = world.complex.resolve(key);
+        let placed;
+        let block = match &resolved.to_world {
+            None => resolved.block,
+            Some(t) => {
+                let solids = resolved.block.solids().iter().map(|s| s.transformed(t)).collect();
+                let b = resolved.block;
+                placed = complex::Block::new(b.name(), solids, b.opacity(), b.material());
+                match &placed {
+                    Ok(block) => block,
+                    // A placement whose solids do not stay finite: left out.
+                    Err(_) => continue,
+                }
+            }
+        };
         // A one-solid block is the solid itself: POV warns about a CSG of
         // one member, and the wrapper would only cost it time.
         let single = block.solids().len() == 1;
@@ -307,7 +337,7 @@ mod tests {
                                     "projection": "orthographic", "diagonal": 5 },
                         "blocks": [ { "objects": [ { "sphere": {} } ] } ] }"#;
         let world = crate::format::SceneFile::load_str(text).unwrap();
-        let pov = export(&world, PovOptions::default());
+        let pov = export(&world, PovOptions::default()).unwrap();
         let camera = pov.split("camera {").nth(1).unwrap();
         assert!(camera.contains("orthographic"), "{camera}");
         assert!(camera.contains("direction <0, 0, -1>"), "{camera}");

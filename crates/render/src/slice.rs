@@ -343,7 +343,7 @@ pub fn slice(world: &World, raster: &Raster) -> Slice {
 
 /// The 1-based index of a block's material.
 fn material_id(world: &World, b: BlockId) -> u32 {
-    world.blocks()[b.index()].material as u32 + 1
+    world.block_info(b).material as u32 + 1
 }
 
 /// Empty space in a PNG slice: white.

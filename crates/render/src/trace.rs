@@ -64,7 +64,9 @@ pub struct HitReport {
 /// Everything `komplex trace` prints.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct TraceReport {
-    /// Every block's interval set (raw, `λ >= 0`, before the ε rule).
+    /// Every block's interval set (raw, `λ >= 0`, before the ε rule); in a
+    /// scene with instances of more than [`MAX_BLOCKS_LISTED`] blocks, only
+    /// those of the blocks the ray meets, after the ε rule.
     pub blocks: Vec<BlockReport>,
     /// The partition of the ray under the priority rule.
     pub segments: Vec<SegmentReport>,
@@ -76,25 +78,34 @@ fn finite(x: f64) -> Option<f64> {
     x.is_finite().then_some(x)
 }
 
+/// The most blocks of a scene with instances whose intervals `trace` lists
+/// one by one, met by the ray or not; beyond, it lists those the ray meets.
+pub const MAX_BLOCKS_LISTED: usize = 1 << 16;
+
 /// Traces one ray from `origin` along `direction` (normalised).
 pub fn trace(world: &World, origin: [f64; 3], direction: [f64; 3]) -> Result<TraceReport, Error> {
     let ray = Ray::new(Point3::from(Vector3::from(origin)), Vector3::from(direction))
         .map_err(|e| Error::Options(format!("--origin/--direction: {e}")))?;
     let complex = &world.complex;
     let mut set = Vec::new();
-    let blocks = complex
-        .blocks()
-        .iter()
-        .enumerate()
-        .map(|(i, b)| {
-            complex.block_intervals_into(complex::BlockId(i as u32), &ray, &mut set);
-            BlockReport {
-                index: i as u32 + 1,
-                name: b.name().to_string(),
-                intervals: set.iter().map(|iv| [finite(iv.enter.t), finite(iv.exit.t)]).collect(),
-            }
-        })
-        .collect();
+    let report = |i: u32, set: &[quadric::Interval]| BlockReport {
+        index: i + 1,
+        name: complex.block(complex::BlockId(i)).name().to_string(),
+        intervals: set.iter().map(|iv| [finite(iv.enter.t), finite(iv.exit.t)]).collect(),
+    };
+    let blocks = if complex.len() <= MAX_BLOCKS_LISTED || !world.is_instanced() {
+        (0..complex.len() as u32)
+            .map(|i| {
+                complex.block_intervals_into(complex::BlockId(i), &ray, &mut set);
+                report(i, &set)
+            })
+            .collect()
+    } else {
+        // Too many to list: the blocks the ray meets, after the ε rule.
+        let mut met = complex::BlockIntervals::new();
+        complex.intervals_into(&ray, &mut met);
+        met.iter().map(|(id, set)| report(id.0, set)).collect()
+    };
     let partition = complex.partition(&ray);
     let segments = partition.segments.iter().map(|s| SegmentReport::new(complex, s)).collect();
     let hit = complex.cast_ray(&ray, f64::INFINITY).map(|h| HitReport {

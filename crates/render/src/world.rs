@@ -241,36 +241,210 @@ pub struct World {
     materials: Vec<Material>,
     /// The blocks.
     pub complex: Complex,
-    /// Per block, parallel to `complex.blocks()`.
-    blocks: Vec<BlockInfo>,
-    /// Per block, the material index of all its surfaces, or `u32::MAX`
-    /// when its solids' materials differ (then `blocks` answers): four
-    /// bytes per block, where a `BlockInfo` is 64 and its solid list a heap
-    /// buffer of its own, so a shaded hit of a large scene reads one likely
-    /// cached word. Built with the world (`materials` and `blocks` are
-    /// read-only, so it stays true), not per frame: at 100,000 blocks a
-    /// per-frame build would read 7 MB of block data the render itself
-    /// never needs.
+    /// The block infos of each block list, by the key of the complex built
+    /// from it (`Complex::resolve`): the top list's (key 0), then each
+    /// definition's (its index in key order + 1), each parallel to that
+    /// complex's own blocks. For a scene without instances, the first is
+    /// parallel to `complex.blocks()` and the only one.
+    tables: Vec<Vec<BlockInfo>>,
+    /// Per block of the top list, the material index of all its surfaces,
+    /// or `u32::MAX` when its solids' materials differ (then `tables`
+    /// answers): four bytes per block, where a `BlockInfo` is 64 and its
+    /// solid list a heap buffer of its own, so a shaded hit of a large
+    /// scene reads one likely cached word. Built with the world (`materials`
+    /// and `tables` are read-only, so it stays true), not per frame: at
+    /// 100,000 blocks a per-frame build would read 7 MB of block data the
+    /// render itself never needs. Empty for a scene with instances, whose
+    /// hits go through `Complex::resolve`.
     surface_materials: Vec<u32>,
+    /// How the block lists of a scene with instances place each other
+    /// (`None` for a scene without).
+    layout: Option<Layout>,
+}
+
+/// The structure of a scene with instances: per block list (by key, as
+/// `World::tables`), its entries in order, and the complex built from each
+/// definition's list. Enough to count or list the blocks of the expansion
+/// that satisfy a condition without visiting the others.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Layout {
+    /// By key: the list's own blocks and placed definitions, in order.
+    pub lists: Vec<Vec<Item>>,
+    /// By key: the complex of that list (`None` for the top list: `World::complex`).
+    pub complexes: Vec<Option<std::sync::Arc<Complex>>>,
+    /// Whether every block's surfaces all have the block's material (no
+    /// object names a material of its own): then a hit's material is read
+    /// off the block, without `Complex::resolve`. Set by `World::new`.
+    pub uniform: bool,
+}
+
+/// One entry of a block list in a [`Layout`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Item {
+    /// The list's next own block.
+    Block,
+    /// `elements` copies of the list of key `key`.
+    Placed {
+        /// The placed definition's key.
+        key: u32,
+        /// Its number of elements (1 for an instance).
+        elements: u64,
+    },
 }
 
 impl World {
-    /// A world of these parts; `blocks` parallel to `complex.blocks()`,
-    /// their material indices into `materials`.
+    /// A world of these parts; `tables` the block infos of each block list
+    /// by key (see the field), their material indices into `materials`.
     pub(crate) fn new(
         camera: Camera,
         settings: Settings,
         lights: Vec<Light>,
         materials: Vec<Material>,
         complex: Complex,
-        blocks: Vec<BlockInfo>,
+        tables: Vec<Vec<BlockInfo>>,
+        layout: Option<Layout>,
     ) -> Self {
         let uniform = |info: &BlockInfo| {
             let same = info.solid_materials.iter().all(|&m| m == info.material);
             u32::try_from(info.material).ok().filter(|&m| same && m != u32::MAX).unwrap_or(u32::MAX)
         };
-        let surface_materials = blocks.iter().map(uniform).collect();
-        World { camera, settings, lights, materials, complex, blocks, surface_materials }
+        let surface_materials =
+            if complex.is_assembled() { vec![] } else { tables.iter().flatten().map(uniform).collect() };
+        let mut layout = layout;
+        if let Some(l) = &mut layout {
+            l.uniform = tables.iter().flatten().all(|info| info.solid_materials.iter().all(|&m| m == info.material));
+        }
+        World { camera, settings, lights, materials, complex, tables, surface_materials, layout }
+    }
+
+    /// Whether the scene places definitions (instances or lattices).
+    pub fn is_instanced(&self) -> bool {
+        self.layout.is_some()
+    }
+
+    /// The own blocks of the list of key `key` with their infos.
+    fn own_blocks(&self, key: usize) -> impl Iterator<Item = (&complex::Block, &BlockInfo)> {
+        let complex = match self.layout.as_ref().and_then(|l| l.complexes.get(key)).and_then(Option::as_ref) {
+            Some(c) => &**c,
+            None => &self.complex,
+        };
+        complex.blocks().iter().zip(&self.tables[key])
+    }
+
+    /// Over the blocks of the expansion, the sum of `f` of each (of the
+    /// block in its list's frame and its info), computed once per block
+    /// the file writes and multiplied by how often it is placed, saturating.
+    pub fn sum_over_blocks(&self, f: impl Fn(&complex::Block, &BlockInfo) -> u64) -> u64 {
+        let Some(layout) = &self.layout else {
+            return self.own_blocks(0).map(|(b, i)| f(b, i)).fold(0, u64::saturating_add);
+        };
+        let mut sums = vec![0u64; layout.lists.len()];
+        let mut done = vec![false; layout.lists.len()];
+        // Definitions may place definitions of any key; settle them in an
+        // order where each comes after those it places.
+        let mut stack: Vec<usize> = (0..layout.lists.len()).rev().collect();
+        while let Some(&key) = stack.last() {
+            if done[key] {
+                stack.pop();
+                continue;
+            }
+            let pending: Vec<usize> = layout.lists[key]
+                .iter()
+                .filter_map(|item| match item {
+                    Item::Placed { key: k, .. } if !done[*k as usize] => Some(*k as usize),
+                    _ => None,
+                })
+                .collect();
+            if !pending.is_empty() {
+                stack.extend(pending);
+                continue;
+            }
+            let own = self.own_blocks(key).map(|(b, i)| f(b, i)).fold(0, u64::saturating_add);
+            sums[key] = layout.lists[key].iter().fold(own, |sum, item| match item {
+                Item::Block => sum,
+                Item::Placed { key: k, elements } => sum.saturating_add(sums[*k as usize].saturating_mul(*elements)),
+            });
+            done[key] = true;
+            stack.pop();
+        }
+        sums[0]
+    }
+
+    /// The ids of the blocks of the expansion for which `keep` holds (of
+    /// the block in its list's frame and its info), in id order, if there
+    /// are at most `cap` of them; `None` if there are more. Visits only the
+    /// placements that hold such a block.
+    pub fn select_blocks(
+        &self,
+        keep: impl Fn(&complex::Block, &BlockInfo) -> bool,
+        cap: usize,
+    ) -> Option<Vec<complex::BlockId>> {
+        let Some(layout) = &self.layout else {
+            let ids: Vec<complex::BlockId> = self
+                .own_blocks(0)
+                .enumerate()
+                .filter(|(_, (b, i))| keep(b, i))
+                .map(|(n, _)| complex::BlockId(n as u32))
+                .collect();
+            return (ids.len() <= cap).then_some(ids);
+        };
+        if self.sum_over_blocks(|b, i| u64::from(keep(b, i))) > cap as u64 {
+            return None;
+        }
+        let len_of = |key: usize| -> u64 {
+            // The length of a list's expansion: the length of its complex.
+            match layout.complexes.get(key).and_then(Option::as_ref) {
+                Some(c) => c.len() as u64,
+                None => self.complex.len() as u64,
+            }
+        };
+        let kept: Vec<Vec<bool>> =
+            (0..layout.lists.len()).map(|key| self.own_blocks(key).map(|(b, i)| keep(b, i)).collect()).collect();
+        let mut any = vec![None::<bool>; layout.lists.len()];
+        let mut out = Vec::new();
+        fn walk(
+            layout: &Layout,
+            kept: &[Vec<bool>],
+            any: &mut Vec<Option<bool>>,
+            len_of: &dyn Fn(usize) -> u64,
+            key: usize,
+            base: u64,
+            out: &mut Vec<complex::BlockId>,
+        ) -> bool {
+            let mut next = base;
+            let mut own = 0;
+            let mut found = false;
+            for item in &layout.lists[key] {
+                match item {
+                    Item::Block => {
+                        if kept[key][own] {
+                            out.push(complex::BlockId(next as u32));
+                            found = true;
+                        }
+                        own += 1;
+                        next += 1;
+                    }
+                    Item::Placed { key: k, elements } => {
+                        let k = *k as usize;
+                        let stride = len_of(k);
+                        if any[k] != Some(false) {
+                            for e in 0..*elements {
+                                let f = walk(layout, kept, any, len_of, k, next + e * stride, out);
+                                any[k] = Some(f);
+                                found |= f;
+                                if !f {
+                                    break;
+                                }
+                            }
+                        }
+                        next += elements * stride;
+                    }
+                }
+            }
+            found
+        }
+        walk(layout, &kept, &mut any, &len_of, 0, 0, &mut out);
+        Some(out)
     }
 
     /// The materials; indices are `MaterialKey`s (the last one is the
@@ -279,10 +453,25 @@ impl World {
         &self.materials
     }
 
-    /// Per block, parallel to `complex.blocks()`: its materials and place
-    /// in the file.
-    pub fn blocks(&self) -> &[BlockInfo] {
-        &self.blocks
+    /// The materials and place in the file of block `id` (of the
+    /// expansion): the info of the block as the file writes it, which every
+    /// placed copy of a definition's block shares.
+    ///
+    /// # Panics
+    /// If `id` is not a block of the complex.
+    pub fn block_info(&self, id: complex::BlockId) -> &BlockInfo {
+        if !self.complex.is_assembled() {
+            return &self.tables[0][id.index()];
+        }
+        let r = self.complex.resolve(id);
+        &self.tables[r.key as usize][r.own as usize]
+    }
+
+    /// Every block the file writes, each once with its info: the top
+    /// list's, then each definition's (however often it is placed), each in
+    /// its list's frame.
+    pub fn written_blocks(&self) -> impl Iterator<Item = (&complex::Block, &BlockInfo)> {
+        (0..self.tables.len()).flat_map(|key| self.own_blocks(key))
     }
 
     /// The material of solid `solid` of block `block`.
@@ -292,18 +481,37 @@ impl World {
                 return &self.materials[m as usize];
             }
         }
-        let info = &self.blocks[block.index()];
+        if self.layout.as_ref().is_some_and(|l| l.uniform) {
+            // Every block's surfaces have its material, the block's own key:
+            // no need to resolve the placement.
+            return self.block_material(block);
+        }
+        let info = self.block_info(block);
         let m = info.solid_materials.get(solid as usize).copied().unwrap_or(info.material);
         &self.materials[m]
     }
 
     /// The material of a block (its medium, for transparent blocks).
     pub fn block_material(&self, block: complex::BlockId) -> &Material {
-        &self.materials[self.blocks[block.index()].material]
+        if self.layout.is_some() {
+            // The block's key is its material's index (`flatten`), read
+            // without resolving the placement.
+            return &self.materials[self.complex.block(block).material().0 as usize];
+        }
+        &self.materials[self.block_info(block).material]
     }
 
-    /// World to the frame of a block with a textured material.
-    pub fn frame(&self, block: complex::BlockId) -> Option<&Transform> {
-        self.blocks[block.index()].frame.as_deref()
+    /// World to the frame of a block with a textured material: its own
+    /// frame's map composed with the inverse of its definition's placement.
+    pub fn frame(&self, block: complex::BlockId) -> Option<Transform> {
+        if !self.complex.is_assembled() {
+            return self.tables[0][block.index()].frame.as_deref().copied();
+        }
+        let r = self.complex.resolve(block);
+        let frame = *self.tables[r.key as usize][r.own as usize].frame.as_deref()?;
+        Some(match r.to_world {
+            None => frame,
+            Some(to_world) => to_world.inverse().then(&frame),
+        })
     }
 }
