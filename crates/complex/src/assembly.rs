@@ -646,7 +646,7 @@ impl Assembly {
         let s = block.solids().get(solid as usize)?;
         Some(match placing {
             Placing::Identity => *s,
-            Placing::Translate(v) => s.transformed(&Transform::translate(v).ok()?),
+            Placing::Translate(v) => s.translated(&v),
             Placing::General(m) => s.transformed(&m),
         })
     }

@@ -230,6 +230,15 @@ impl Quadric {
         Self::with_definiteness(m.apply_point(&Point3::from(self.centre)).coords, a, w, self.k, self.definite, axis)
     }
 
+    /// The solid moved by `v`: [`transformed`](Self::transformed) by a
+    /// translation, without its matrix products. A translation leaves `A`,
+    /// `w` and `k` as they are and moves the centre by one rounding per
+    /// coordinate, so the two agree (to the sign of a zero coefficient,
+    /// which no query reads; tested).
+    pub fn translated(&self, v: &Vector3<f64>) -> Self {
+        Quadric { centre: self.centre + v, ..*self }
+    }
+
     /// `L⁻ᵀ A L⁻¹` (symmetrised) and `L⁻ᵀ w`, before the power-of-two
     /// normalisation of [`Quadric::with_definiteness`].
     fn placed_parts(&self, m: &Transform) -> (Matrix3<f64>, Vector3<f64>) {

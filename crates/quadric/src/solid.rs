@@ -52,6 +52,18 @@ impl Solid {
         }
     }
 
+    /// The solid moved by `v` ([`Quadric::translated`] for a quadric;
+    /// the same solid as `transformed` by the translation).
+    pub fn translated(&self, v: &Vector3<f64>) -> Self {
+        match self {
+            Solid::Quadric(q) => Solid::Quadric(q.translated(v)),
+            Solid::HalfSpace(h) => match Transform::translate(*v) {
+                Ok(m) => Solid::HalfSpace(h.transformed(&m)),
+                Err(_) => *self,
+            },
+        }
+    }
+
     /// The solid moved by `m`, checked: an error if a coefficient overflows
     /// or a part of the solid underflows ([`Quadric::try_transformed`],
     /// [`HalfSpace::try_transformed`]).

@@ -703,3 +703,20 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    /// `translated` is `transformed` by the translation: the same solid, to
+    /// the sign of a zero coefficient (which `==` does not tell apart), so
+    /// the same intervals along any ray.
+    #[test]
+    fn translated_is_transformed_by_the_translation(
+        solid in strategies::solid(),
+        v in strategies::point(1e3),
+        ray in strategies::ray(10.0),
+    ) {
+        let m = quadric::Transform::translate(v.coords).expect("a finite translation");
+        let (fast, slow) = (solid.translated(&v.coords), solid.transformed(&m));
+        prop_assert_eq!(fast, slow);
+        prop_assert_eq!(fast.intervals(&ray, 0), slow.intervals(&ray, 0));
+    }
+}
