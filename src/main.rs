@@ -55,6 +55,8 @@ enum Command {
     Volume(VolumeArgs),
     /// List the pairs of blocks that share a positive volume.
     Overlaps(OverlapsArgs),
+    /// Convert an OpenMC geometry.xml (or the <geometry> of a model.xml) into a scene.
+    ImportOpenmc(ImportOpenmcArgs),
 }
 
 // The argument structs carry no doc comment of their own: the variant's
@@ -242,6 +244,21 @@ struct OverlapsArgs {
     measure: MeasureArgs,
 }
 
+#[derive(clap::Args)]
+struct ImportOpenmcArgs {
+    /// OpenMC's geometry.xml, or a model.xml holding a <geometry>.
+    xml: PathBuf,
+    /// Output scene file [default: stdout; nothing with --check].
+    #[arg(short, long, value_name = "OUT.json")]
+    output: Option<PathBuf>,
+    /// Print cells, blocks, bounds and the overlaps between different cells.
+    #[arg(long)]
+    check: bool,
+    /// Random points --check samples for overlaps.
+    #[arg(long, value_name = "N", default_value_t = 1_000_000, requires = "check")]
+    points: u64,
+}
+
 /// The options `volume` and `overlaps` share.
 #[derive(clap::Args)]
 struct MeasureArgs {
@@ -402,6 +419,7 @@ fn run(command: Command) -> Result<(), Error> {
         Command::Generate(args) => generate(args),
         Command::Volume(args) => volume(args),
         Command::Overlaps(args) => overlaps(args),
+        Command::ImportOpenmc(args) => import_openmc(args),
     }
 }
 
@@ -761,6 +779,26 @@ fn overlaps(args: OverlapsArgs) -> Result<(), Error> {
     let (world, options) = args.measure.prepare()?;
     let report = render::measure::overlaps(&world, &options)?;
     args.measure.emit(|| report.to_json(), || report.to_string())
+}
+
+/// `komplex import-openmc`: the scene to a file or stdout; with `--check`
+/// the summary instead of (or besides) the scene.
+fn import_openmc(args: ImportOpenmcArgs) -> Result<(), Error> {
+    if let Some(p) = &args.output {
+        render::output::check_writable(p)?;
+    }
+    let imported = render::openmc::import_file(&args.xml)?;
+    for w in &imported.warnings {
+        eprintln!("warning: {}: {w}", args.xml.display());
+    }
+    if args.output.is_some() || !args.check {
+        write_text(args.output.as_deref(), &render::generate::to_json(&imported.scene))?;
+    }
+    if args.check {
+        let world = imported.scene.to_world().map_err(|source| Error::Scene { file: args.xml.clone(), source })?;
+        print!("{}", render::openmc::summary(&imported, &world, args.points.max(1)));
+    }
+    Ok(())
 }
 
 /// Writes `text` to `path`, or to stdout without a path. A file is

@@ -54,6 +54,11 @@ pub struct SceneFile {
     /// The frames of an animation (`komplex render --frames`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub animation: Option<AnimationSpec>,
+    /// Any JSON the renderer ignores: where the scene came from and what
+    /// it does not model (`komplex import-openmc` keeps OpenMC's boundary
+    /// conditions here).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub metadata: Option<serde_json::Value>,
 }
 
 /// The animation's default frame range: `{"frames": [A, B]}`, both

@@ -114,6 +114,7 @@ pub fn sphereflake(level: u32) -> SceneFile {
         ]),
         blocks,
         animation: None,
+        metadata: None,
     }
 }
 
@@ -205,6 +206,7 @@ pub fn grid(count: u32, seed: u64) -> SceneFile {
         ]),
         blocks,
         animation: None,
+        metadata: None,
     }
 }
 
@@ -239,6 +241,7 @@ pub fn nested_lattice(outer: u32, inner: u32) -> SceneFile {
         schema: None,
         definitions,
         animation: None,
+        metadata: None,
         camera: camera([0.0, 14.0, side / 2.0 + 10.0], [0.0, -0.3, -1.0], 60.0),
         settings: Settings { ambient: [0.15; 3], background: [0.35, 0.45, 0.6], max_depth: 2, ..Settings::default() },
         lights: vec![light([side / 4.0, 40.0, side / 2.0], 0.8)],
@@ -256,24 +259,38 @@ pub fn nested_lattice(outer: u32, inner: u32) -> SceneFile {
 /// The document as JSON with one block per line: compact for 100,000
 /// blocks, still diffable.
 pub fn to_json(scene: &SceneFile) -> String {
-    let head = SceneFile { blocks: vec![], ..scene.clone() };
+    let head = SceneFile { blocks: vec![], definitions: BTreeMap::new(), ..scene.clone() };
     // Serialising plain data cannot fail.
     let head = serde_json::to_value(&head).unwrap_or_default();
     let mut out = String::with_capacity(scene.blocks.len() * 200 + 1000);
     out.push_str("{\n");
-    for key in ["$schema", "camera", "settings", "lights", "materials", "definitions"] {
+    for key in ["$schema", "metadata", "camera", "settings", "lights", "materials"] {
         if let Some(v) = head.get(key) {
             out.push_str(&format!("  {}: {},\n", serde_json::Value::from(key), v));
         }
     }
-    out.push_str("  \"blocks\": [\n");
-    for (i, b) in scene.blocks.iter().enumerate() {
-        out.push_str("    ");
-        out.push_str(&serde_json::to_string(b).unwrap_or_default());
-        out.push_str(if i + 1 < scene.blocks.len() { ",\n" } else { "\n" });
+    if !scene.definitions.is_empty() {
+        out.push_str("  \"definitions\": {\n");
+        for (i, (name, d)) in scene.definitions.iter().enumerate() {
+            out.push_str(&format!("    {}: {{ \"blocks\": [\n", serde_json::Value::from(name.as_str())));
+            entries(&mut out, &d.blocks, "      ");
+            out.push_str(if i + 1 < scene.definitions.len() { "    ] },\n" } else { "    ] }\n" });
+        }
+        out.push_str("  },\n");
     }
+    out.push_str("  \"blocks\": [\n");
+    entries(&mut out, &scene.blocks, "    ");
     out.push_str("  ]\n}\n");
     out
+}
+
+/// One entry per line, indented.
+fn entries(out: &mut String, list: &[Entry], indent: &str) {
+    for (i, b) in list.iter().enumerate() {
+        out.push_str(indent);
+        out.push_str(&serde_json::to_string(b).unwrap_or_default());
+        out.push_str(if i + 1 < list.len() { ",\n" } else { "\n" });
+    }
 }
 
 #[cfg(test)]

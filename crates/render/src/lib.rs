@@ -44,6 +44,7 @@ pub mod limits;
 pub mod lobes;
 mod locate;
 pub mod measure;
+pub mod openmc;
 pub mod output;
 pub mod path;
 pub mod png;
