@@ -190,6 +190,8 @@ enum ColorByArg {
     Block,
     /// One colour per material.
     Material,
+    /// One colour per block name (an imported OpenMC cell's blocks are one region).
+    Name,
 }
 
 #[derive(clap::Args)]
@@ -669,6 +671,7 @@ fn slice(args: SliceArgs) -> Result<(), Error> {
     let by = match color_by {
         ColorByArg::Block => ColorBy::Block,
         ColorByArg::Material => ColorBy::Material,
+        ColorByArg::Name => ColorBy::Name,
     };
     render::slice::write(map, &output, by)?;
     let Extent { u0, u1, v0, v1 } = extent;

@@ -1165,3 +1165,104 @@ fn bad_merges_exit_1_and_name_the_part() {
     );
     check(&["merge", "-o", "m.exr"], 2, &["required arguments were not provided", "<PARTS>"]);
 }
+
+#[test]
+fn bad_openmc_imports_exit_1_and_name_the_place() {
+    let cases: &[(&str, &str, &str)] = &[
+        ("xml", r#"<geometry><cell id="1" material="1"></geometry>"#, "line 1, column 37: not well-formed XML"),
+        ("root", "<materials/>", "line 1, column 1: expected <geometry> or <model>, found <materials>"),
+        (
+            "attr",
+            r#"<geometry><surface id="1" type="sphere" coeffs="0 0 0 1"/><cell id="4" material="1" regoin="-1"/></geometry>"#,
+            "line 1, column 59: <cell>: unknown attribute `regoin` (did you mean `region`?)",
+        ),
+        (
+            "type",
+            r#"<geometry><surface id="1" type="spere" coeffs="0 0 0 1"/></geometry>"#,
+            "line 1, column 11: surface 1: unknown surface type `spere` (did you mean `sphere`?)",
+        ),
+        (
+            "coeffs",
+            r#"<geometry><surface id="1" type="sphere" coeffs="0 0 1"/></geometry>"#,
+            "line 1, column 11: surface 1: `sphere` takes 4 coefficients, got 3",
+        ),
+        (
+            "undefined",
+            r#"<geometry><surface id="10" type="sphere" coeffs="0 0 0 1"/><cell id="4" material="1" region="-11"/></geometry>"#,
+            "line 1, column 60: cell 4: region: surface 11 is not defined (did you mean 10?)",
+        ),
+        (
+            "region",
+            r#"<geometry><surface id="1" type="sphere" coeffs="0 0 0 1"/><cell id="4" material="1" region="-1 (2"/></geometry>"#,
+            "line 1, column 59: cell 4: region `-1 (2`: character 4: `(` is never closed",
+        ),
+        (
+            "torus",
+            r#"<geometry><surface id="1" type="x-torus" coeffs="0 0 0 1 1 1"/><cell id="4" material="1" region="-1"/></geometry>"#,
+            "line 1, column 64: cell 4: surface 1 is a x-torus, not a quadric: not supported yet",
+        ),
+        (
+            "hex",
+            r#"<geometry><hex_lattice id="5"/><cell id="4" fill="5"/></geometry>"#,
+            "line 1, column 11: lattice 5: hexagonal lattices are not supported yet (filling cell 4)",
+        ),
+        (
+            "cycle",
+            r#"<geometry><surface id="1" type="sphere" coeffs="0 0 0 1"/><cell id="1" fill="2" region="-1"/><cell id="2" universe="2" fill="3"/><cell id="3" universe="3" fill="2"/></geometry>"#,
+            "line 1, column 130: cell 3: fills form a cycle: universe 2 → universe 3 → universe 2",
+        ),
+        (
+            "roots",
+            r#"<geometry><cell id="1" material="1"/><cell id="2" universe="1" material="2"/></geometry>"#,
+            "line 1, column 1: more than one universe fills nothing, so the root is ambiguous: 0, 1",
+        ),
+        (
+            "count",
+            r#"<geometry><surface id="1" type="sphere" coeffs="0 0 0 1"/><cell id="1" fill="5" region="-1"/><lattice id="5"><dimension>2 1</dimension><lower_left>0 0</lower_left><pitch>1 1</pitch><universes>2</universes></lattice><cell id="2" universe="2" material="1"/></geometry>"#,
+            "line 1, column 182: lattice 5: universes: 1 entries for 2 × 1 × 1 elements",
+        ),
+        (
+            "outer",
+            r#"<geometry><surface id="1" type="sphere" coeffs="0 0 0 1"/><cell id="1" fill="5" region="-1"/><lattice id="5"><dimension>1 1</dimension><lower_left>0 0</lower_left><pitch>1 1</pitch><outer>3</outer><universes>2</universes></lattice><cell id="2" universe="2" material="1"/><cell id="3" universe="3" material="1" region="-1"/></geometry>"#,
+            "line 1, column 94: lattice 5: outer universe 3 has cell 3 with a region or a fill",
+        ),
+        (
+            "everything",
+            r#"<geometry><cell id="1" material="1"/></geometry>"#,
+            "line 1, column 11: cell 1 has no region and nothing around it clips it: it would fill all of space",
+        ),
+        (
+            "rotation",
+            r#"<geometry><surface id="1" type="sphere" coeffs="0 0 0 1"/><cell id="1" material="1" region="-1" rotation="0 0 90"/></geometry>"#,
+            "line 1, column 59: cell 1: `rotation` needs a `fill` (the cell has a material)",
+        ),
+        (
+            "angles",
+            r#"<geometry><surface id="1" type="sphere" coeffs="0 0 0 1"/><cell id="1" fill="2" region="-1" rotation="0 0"/><cell id="2" universe="2" material="1"/></geometry>"#,
+            "line 1, column 59: cell 1: rotation: 3 angles or 9 matrix entries expected, got 2 numbers",
+        ),
+        (
+            "distributed",
+            r#"<geometry><surface id="1" type="sphere" coeffs="0 0 0 1"/><cell id="1" material="1 2" region="-1"/></geometry>"#,
+            "line 1, column 59: cell 1: distributed materials (`1 2`) are not supported",
+        ),
+    ];
+    for (name, xml, message) in cases {
+        let file = format!("{name}.xml");
+        // `-o out.exr`: an existing file the failed import must not touch.
+        check_with(
+            &[(file.as_str(), xml.as_bytes())],
+            &["import-openmc", file.as_str(), "-o", "out.exr"],
+            1,
+            &[&format!("error: {file}: {message}")],
+        );
+    }
+    check(&["import-openmc", "none.xml"], 3, &["error: none.xml: No such file or directory (os error 2)"]);
+    let good = r#"<geometry><surface id="1" type="sphere" coeffs="0 0 0 1"/><cell id="1" material="1" region="-1"/></geometry>"#;
+    check_with(
+        &[("good.xml", good.as_bytes())],
+        &["import-openmc", "good.xml", "-o", "missing/s.json"],
+        3,
+        &["error: missing/s.json: cannot create a file in directory missing"],
+    );
+}

@@ -270,12 +270,17 @@ pub enum ColorBy {
     Block,
     /// One colour per material.
     Material,
+    /// One colour per block name: the blocks of one name (an imported
+    /// OpenMC cell's terms) are one region, drawn without boundaries or
+    /// hatching between them.
+    Name,
 }
 
 /// The ownership map of a raster: per pixel (rows from the top), the
 /// owner's 1-based block index (0: empty space), its material's 1-based
-/// index into [`World::materials`] (0: empty space), and how many blocks
-/// hold the pixel's centre (two or more: an overlap).
+/// index into [`World::materials`] (0: empty space), its name's, and how
+/// many blocks (and how many distinct names) hold the pixel's centre (two
+/// or more: an overlap).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Slice {
     /// Pixels across.
@@ -288,6 +293,12 @@ pub struct Slice {
     pub material: Vec<u32>,
     /// Blocks whose own solids hold the pixel's centre.
     pub overlap: Vec<u32>,
+    /// 1-based index of the owner's name in [`Slice::names`], 0 for none.
+    pub name: Vec<u32>,
+    /// Distinct names among the blocks holding the pixel's centre.
+    pub named_overlap: Vec<u32>,
+    /// The owners' names, in order of first appearance (row by row).
+    pub names: Vec<String>,
 }
 
 /// Rows classified at a time: bounds the memory of the points.
@@ -320,6 +331,7 @@ pub fn slice(world: &World, raster: &Raster) -> Slice {
     let n = w as usize * h as usize;
     let mut owners = vec![None; n];
     let mut overlap = vec![0u32; n];
+    let mut named_overlap = vec![0u32; n];
     let mut points = Vec::with_capacity(w as usize * BAND_ROWS.min(h) as usize);
     for band in (0..h).step_by(BAND_ROWS as usize) {
         let rows = band..(band + BAND_ROWS).min(h);
@@ -328,17 +340,42 @@ pub fn slice(world: &World, raster: &Raster) -> Slice {
         let at = band as usize * w as usize..rows.end as usize * w as usize;
         // The lengths match by construction.
         let _ = complex.classify(&points, &mut owners[at.clone()]);
-        points.par_chunks(OVERLAP_CHUNK).zip(overlap[at].par_chunks_mut(OVERLAP_CHUNK)).for_each(|(p, o)| {
+        let counts =
+            overlap[at.clone()].par_chunks_mut(OVERLAP_CHUNK).zip(named_overlap[at].par_chunks_mut(OVERLAP_CHUNK));
+        points.par_chunks(OVERLAP_CHUNK).zip(counts).for_each(|(p, (o, named))| {
             let mut inside = Vec::new();
-            for (p, o) in p.iter().zip(o) {
+            let mut seen: Vec<&str> = Vec::new();
+            for ((p, o), named) in p.iter().zip(o).zip(named) {
                 complex.blocks_containing(p, &mut inside);
                 *o = inside.len() as u32;
+                seen.clear();
+                for b in &inside {
+                    let n = complex.block(*b).name();
+                    if !seen.contains(&n) {
+                        seen.push(n);
+                    }
+                }
+                *named = seen.len() as u32;
             }
         });
     }
     let material = owners.iter().map(|o| o.map_or(0, |b| material_id(world, b))).collect();
     let block = owners.iter().map(|o| o.map_or(0, |b| b.0 + 1)).collect();
-    Slice { width: w, height: h, block, material, overlap }
+    let mut names: Vec<String> = Vec::new();
+    let mut index: std::collections::HashMap<&str, u32> = std::collections::HashMap::new();
+    let name = owners
+        .iter()
+        .map(|o| {
+            o.map_or(0, |b| {
+                let n = complex.block(b).name();
+                *index.entry(n).or_insert_with(|| {
+                    names.push(n.to_string());
+                    names.len() as u32
+                })
+            })
+        })
+        .collect();
+    Slice { width: w, height: h, block, material, overlap, name, named_overlap, names }
 }
 
 /// The 1-based index of a block's material.
@@ -384,7 +421,12 @@ impl Slice {
     /// Whether pixel `(i, j)` lies on a boundary: a pixel beside it (left,
     /// right, above or below) has another owner.
     pub fn is_boundary(&self, i: u32, j: u32) -> bool {
-        let at = |i: u32, j: u32| self.block[j as usize * self.width as usize + i as usize];
+        self.is_boundary_of(&self.block, i, j)
+    }
+
+    /// [`Slice::is_boundary`] between the owners `ids` names (blocks, or names).
+    fn is_boundary_of(&self, ids: &[u32], i: u32, j: u32) -> bool {
+        let at = |i: u32, j: u32| ids[j as usize * self.width as usize + i as usize];
         let me = at(i, j);
         (i > 0 && at(i - 1, j) != me)
             || (i + 1 < self.width && at(i + 1, j) != me)
@@ -399,7 +441,7 @@ impl Slice {
     }
 
     /// The 8-bit RGB image (rows from the top): each owner in its colour
-    /// ([`palette`] of the 0-based block or material index), empty space
+    /// ([`palette`] of the 0-based block, material or name index), empty space
     /// [`EMPTY`], boundaries [`BOUNDARY`], and overlaps hatched with
     /// stripes of the owner's colour at half its value.
     pub fn rgb(&self, by: ColorBy) -> Vec<u8> {
@@ -410,12 +452,20 @@ impl Slice {
                 let id = match by {
                     ColorBy::Block => self.block[k],
                     ColorBy::Material => self.material[k],
+                    ColorBy::Name => self.name[k],
                 };
-                let colour = if self.is_boundary(i, j) {
+                let (edges, hatched) = match by {
+                    ColorBy::Name => (
+                        self.is_boundary_of(&self.name, i, j),
+                        self.named_overlap[k] >= 2 && (i + j) % HATCH_PERIOD < 2,
+                    ),
+                    _ => (self.is_boundary(i, j), self.is_hatched(i, j)),
+                };
+                let colour = if edges {
                     BOUNDARY
                 } else if id == 0 {
                     EMPTY
-                } else if self.is_hatched(i, j) {
+                } else if hatched {
                     palette(id - 1).map(|c| c / 2)
                 } else {
                     palette(id - 1)

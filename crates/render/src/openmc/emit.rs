@@ -40,12 +40,20 @@ struct Emitter<'m> {
     materials: Vec<Option<u64>>,
     /// The universes being emitted, outermost first (to name a cycle).
     stack: Vec<u64>,
+    /// The cell whose fill is being emitted (to place a cycle).
+    via: Option<(u64, super::model::Pos)>,
 }
 
 /// Emits the model's root universe.
 pub fn emit(model: &Model) -> Result<Emitted, ImportError> {
-    let mut e =
-        Emitter { model, definitions: BTreeMap::new(), shared: HashMap::new(), materials: Vec::new(), stack: vec![] };
+    let mut e = Emitter {
+        model,
+        definitions: BTreeMap::new(),
+        shared: HashMap::new(),
+        materials: Vec::new(),
+        stack: vec![],
+        via: None,
+    };
     let blocks = e.universe(model.root, &[])?;
     if blocks.is_empty() {
         return Err(ImportError { pos: None, message: "the root universe has no cell with a non-empty region".into() });
@@ -58,7 +66,11 @@ impl Emitter<'_> {
     fn universe(&mut self, u: u64, clip: &[Side]) -> Result<Vec<Entry>, ImportError> {
         if let Some(i) = self.stack.iter().position(|x| *x == u) {
             let cycle: Vec<String> = self.stack[i..].iter().chain([&u]).map(|x| format!("universe {x}")).collect();
-            return Err(ImportError { pos: None, message: format!("fills form a cycle: {}", cycle.join(" → ")) });
+            let (pos, by) = match self.via {
+                Some((cell, pos)) => (Some(pos), format!("cell {cell}: ")),
+                None => (None, String::new()),
+            };
+            return Err(ImportError { pos, message: format!("{by}fills form a cycle: {}", cycle.join(" → ")) });
         }
         self.stack.push(u);
         let model = self.model;
@@ -114,6 +126,7 @@ impl Emitter<'_> {
                         let r = rotation.map_or_else(Matrix3::identity, |m| Matrix3::from_fn(|i, j| m[j][i]));
                         let motion = Motion { r, t: Vector3::from(*translation) };
                         let inner: Vec<Side> = sides.iter().map(|s| s.in_child(&motion)).collect();
+                        self.via = Some((cell.id, cell.pos));
                         let blocks = match model.lattices.get(id) {
                             Some(l) => self.lattice(l, &inner)?,
                             None => self.universe(*id, &inner)?,
