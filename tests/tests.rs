@@ -14,6 +14,7 @@ mod exr_output;
 mod instances;
 mod interrupt;
 mod measure;
+mod openmc;
 mod mutations;
 mod shading;
 mod slice;

@@ -112,9 +112,19 @@ fn lattice_elements_share_definitions() {
     let (imported, world) = load(&shared("lattice"));
     // 841 elements; those the root cell's cylinder and planes do not cut
     // share one definition per universe.
-    let instances = world.complex.len();
     assert!(imported.scene.definitions.len() < 300, "{} definitions", imported.scene.definitions.len());
-    assert!(instances > 10_000, "{instances} blocks placed");
+    // Every element that meets the quarter disc r < 50 is placed, no other:
+    // 29 × 29 elements of pitch 1.778 from −0.889.
+    let meets = (0..29 * 29)
+        .filter(|k| {
+            let near = |i: usize| (-0.889 + i as f64 * 1.778).max(0.0);
+            near(k % 29).hypot(near(k / 29)) < 50.0
+        })
+        .count();
+    let group = imported.scene.blocks.iter().find(|e| e.group.as_deref() == Some("cell 3")).unwrap();
+    let placed = group.blocks.as_ref().unwrap().iter().filter(|e| e.instance.is_some()).count();
+    assert_eq!(placed, meets);
+    assert!(world.complex.len() > placed * 13);
     assert!(imported.bounded);
     let (lo, hi) = imported.frame;
     for i in 0..2 {

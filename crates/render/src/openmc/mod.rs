@@ -168,7 +168,8 @@ fn framing(world: &World) -> (([f64; 3], [f64; 3]), bool) {
     ((lo, hi), bounded)
 }
 
-/// A perspective camera looking at the box's centre from above one corner
+/// A perspective camera looking at the box's centre from above its corner
+/// of least x and y
 /// (z up, as OpenMC models are drawn), far enough for the box's bounding
 /// sphere to fit the 40° diagonal opening.
 fn camera(frame: &([f64; 3], [f64; 3])) -> CameraSpec {
@@ -179,7 +180,7 @@ fn camera(frame: &([f64; 3], [f64; 3])) -> CameraSpec {
     let aperture: f64 = 40.0;
     // The image's shorter side sees about 0.6 of the diagonal's angle.
     let distance = radius / (0.6 * (aperture.to_radians() / 2.0)).tan();
-    let dir = [-0.55, -0.65, -0.52];
+    let dir = [0.55, 0.65, -0.52];
     let norm = (dir.iter().map(|x| x * x).sum::<f64>()).sqrt();
     let eye = [0, 1, 2].map(|i| centre[i] - dir[i] / norm * distance);
     CameraSpec {

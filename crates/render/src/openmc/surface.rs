@@ -224,46 +224,58 @@ impl Side {
     }
 
     /// Whether the side holds every point of the box `[−h, h]` (per axis;
-    /// an infinite `h` is an unbounded axis). Exact for planes; for a
-    /// convex quadric on its `f ≤ 0` side by its values at the corners
-    /// (the maximum of a convex function over a box is at a corner);
-    /// `false` (unknown) otherwise.
+    /// an infinite `h` is an unbounded axis). `false` where unknown: see
+    /// [`Side::range`].
     pub fn holds_box(&self, h: &Vector3<f64>) -> bool {
-        match &self.shape {
-            Shape::Plane(n, d) => {
-                let n = if self.positive { -n } else { *n };
-                let d = if self.positive { -d } else { *d };
-                support(&n, h) + d <= 0.0
-            }
-            Shape::Quadric(f) => {
-                if self.positive || !is_convex(&f.a) {
-                    return false;
-                }
-                // Along an unbounded axis the function must not change.
-                for i in 0..3 {
-                    if h[i].is_infinite() && (f.a.row(i).iter().any(|x| *x != 0.0) || f.b[i] != 0.0) {
-                        return false;
-                    }
-                }
-                let h = h.map(|x| if x.is_infinite() { 0.0 } else { x });
-                (0..8).all(|corner: u32| {
-                    let x = Vector3::from_fn(|i, _| if corner >> i & 1 == 1 { h[i] } else { -h[i] });
-                    self.value(&x) <= 0.0
-                })
-            }
+        let (lo, hi) = self.range(h);
+        if self.positive {
+            lo.is_some_and(|lo| lo >= 0.0)
+        } else {
+            hi.is_some_and(|hi| hi <= 0.0)
         }
     }
 
-    /// Whether the side misses the box `[−h, h]` (open or touching at a
-    /// face). Exact for planes; `false` (unknown) for quadrics.
+    /// Whether the side misses the box `[−h, h]` (or touches it only on its
+    /// boundary). `false` where unknown.
     pub fn misses_box(&self, h: &Vector3<f64>) -> bool {
+        let (lo, hi) = self.range(h);
+        if self.positive {
+            hi.is_some_and(|hi| hi <= 0.0)
+        } else {
+            lo.is_some_and(|lo| lo >= 0.0)
+        }
+    }
+
+    /// The least and the greatest value of the function over the box
+    /// `[−h, h]`, where known: exact for planes; for a convex quadric the
+    /// greatest is at a corner (the unbounded axes must not change it), and
+    /// the least is known when the quadratic part is diagonal and there is
+    /// no linear part (spheres, cylinders, axis-aligned ellipsoids): the
+    /// sum of `aᵢ · (distance from cᵢ to [−hᵢ, hᵢ])²`, plus `k`.
+    fn range(&self, h: &Vector3<f64>) -> (Option<f64>, Option<f64>) {
         match &self.shape {
-            Shape::Plane(n, d) => {
-                let n = if self.positive { -n } else { *n };
-                let d = if self.positive { -d } else { *d };
-                -support(&n, h) + d >= 0.0
+            Shape::Plane(n, d) => (Some(d - support(n, h)), Some(d + support(n, h))),
+            Shape::Quadric(f) => {
+                if !is_convex(&f.a) {
+                    return (None, None);
+                }
+                let diagonal = f.a == Matrix3::from_diagonal(&f.a.diagonal()) && f.b == Vector3::zeros();
+                let lo = diagonal.then(|| {
+                    (0..3).map(|i| f.a[(i, i)] * (f.c[i].abs() - h[i]).max(0.0).powi(2)).sum::<f64>() + f.k
+                });
+                // Along an unbounded axis the function must not change.
+                let flat = (0..3).all(|i| h[i].is_finite() || (f.a.row(i).iter().all(|x| *x == 0.0) && f.b[i] == 0.0));
+                let hi = flat.then(|| {
+                    let h = h.map(|x| if x.is_infinite() { 0.0 } else { x });
+                    (0..8)
+                        .map(|corner: u32| {
+                            let x = Vector3::from_fn(|i, _| if corner >> i & 1 == 1 { h[i] } else { -h[i] });
+                            self.value(&x)
+                        })
+                        .fold(f64::NEG_INFINITY, f64::max)
+                });
+                (lo, hi)
             }
-            Shape::Quadric(_) => false,
         }
     }
 
