@@ -377,6 +377,26 @@ fn a_lattice_cut_by_a_cone_keeps_the_cut() {
 }
 
 #[test]
+fn a_lattice_around_a_hole_keeps_the_hole() {
+    // The lattice fills the outside of a cylinder of radius 1.1: the
+    // element [1, 2] × [0, 1] comes within 1 of the axis, so it must keep
+    // the cylinder; [1, 2] × [1, 2] (at least √2 away) need not.
+    let xml = r#"<geometry>
+      <surface id="5" type="z-cylinder" coeffs="0 0 1.1"/>
+      <surface id="6" type="sphere" coeffs="0 0 0 2.5"/>
+      <cell id="1" fill="30" region="+5 -6"/>
+      <cell id="2" material="9" region="-5"/>
+      <lattice id="30"><dimension>4 4</dimension><lower_left>-2 -2</lower_left><pitch>1 1</pitch>
+        <universes>10 10 10 10 10 10 10 10 10 10 10 10 10 10 10 10</universes></lattice>
+      <cell id="100" universe="10" material="1"/>
+    </geometry>"#;
+    agree(xml, [-2.2, -2.2, -1.0], [2.2, 2.2, 1.0], 3000, 13);
+    let (_, world) = load(xml);
+    assert_eq!(owner(&world, [1.02, 0.3, 0.0]).map(|o| o.0), Some("cell 2".into()));
+    assert_eq!(owner(&world, [1.5, 0.5, 0.0]).map(|o| o.0), Some("cell 100".into()));
+}
+
+#[test]
 fn a_rotated_fill_lands_where_openmc_puts_it() {
     // rotation="0 0 90": OpenMC's local = M·(global − t) with
     // M = Rz(−90°) = [[0, 1, 0], [−1, 0, 0], [0, 0, 1]], so local = (y, −x, z)
