@@ -1223,8 +1223,8 @@ fn bad_openmc_imports_exit_1_and_name_the_place() {
         ),
         (
             "outer",
-            r#"<geometry><surface id="1" type="sphere" coeffs="0 0 0 1"/><cell id="1" fill="5" region="-1"/><lattice id="5"><dimension>1 1</dimension><lower_left>0 0</lower_left><pitch>1 1</pitch><outer>3</outer><universes>2</universes></lattice><cell id="2" universe="2" material="1"/><cell id="3" universe="3" material="1" region="-1"/></geometry>"#,
-            "line 1, column 94: lattice 5: outer universe 3 has cell 3 with a region or a fill",
+            r#"<geometry><surface id="1" type="sphere" coeffs="0 0 0 1"/><cell id="1" fill="5" region="+1"/><cell id="9" material="2" region="-1"/><lattice id="5"><dimension>1 1</dimension><lower_left>0 0</lower_left><pitch>1 1</pitch><outer>3</outer><universes>2</universes></lattice><cell id="2" universe="2" material="1"/><cell id="3" universe="3" material="1" region="-1"/></geometry>"#,
+            "line 1, column 133: lattice 5: outer universe 3 has cells with regions, so it is tiled, but the cell the lattice fills is unbounded along x: the tiling would not end",
         ),
         (
             "everything",

@@ -19,11 +19,34 @@ fn imported_models_work_with_every_command() {
         let scene: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join(&out)).unwrap()).unwrap();
         assert!(scene["materials"].as_object().is_some_and(|m| !m.is_empty()), "{name}");
         komplex_ok(d, &["check", &out]);
-        komplex_ok(d, &["slice", &out, "--plane", "z=4.5", "-o", &format!("{name}.png"), "--color-by", "name", "--size", "64", "64", "--extent", "-1", "11", "-1", "11"]);
+        komplex_ok(
+            d,
+            &[
+                "slice",
+                &out,
+                "--plane",
+                "z=4.5",
+                "-o",
+                &format!("{name}.png"),
+                "--color-by",
+                "name",
+                "--size",
+                "64",
+                "64",
+                "--extent",
+                "-1",
+                "11",
+                "-1",
+                "11",
+            ],
+        );
         komplex_ok(d, &["render", &out, "-o", &format!("{name}.exr"), "--width", "48", "--height", "36"]);
         if let Some(exr) = read_exr(&d.join(format!("{name}.exr"))) {
             // The framing camera sees the model: some pixel hits a block.
-            let hits = (0..36).flat_map(|j| (0..48).map(move |i| (i, j))).filter(|&(i, j)| exr.at("id.block", j, i) > 0.0).count();
+            let hits = (0..36)
+                .flat_map(|j| (0..48).map(move |i| (i, j)))
+                .filter(|&(i, j)| exr.at("id.block", j, i) > 0.0)
+                .count();
             assert!(hits > 48 * 36 / 10, "{name}: the camera sees {hits} pixels of the model");
         }
     }
@@ -49,10 +72,8 @@ fn check_reports_cells_blocks_bounds_and_overlaps() {
     let o = komplex_ok(d, &["import-openmc", "two.xml", "--check", "--points", "400000"]);
     let out = String::from_utf8_lossy(&o.stdout);
     let line = out.lines().find(|l| l.contains("\"cell 7\" & \"cell 8\"")).unwrap_or_else(|| panic!("{out}"));
-    let numbers: Vec<f64> = line
-        .split(|c: char| c == ' ' || c == '(' || c == ',')
-        .filter_map(|t| t.parse().ok())
-        .collect();
+    let numbers: Vec<f64> =
+        line.split(|c: char| c == ' ' || c == '(' || c == ',').filter_map(|t| t.parse().ok()).collect();
     let (volume, error) = (numbers[0], numbers[1]);
     let want = 5.0 * std::f64::consts::PI / 12.0;
     assert!((volume - want).abs() < 4.0 * error, "{line}: want {want}");

@@ -326,6 +326,13 @@ fn random_lattices_agree_with_the_oracle() {
                 / 2.0
                 + rng.uniform(-0.3, 0.3)
         });
+        // The outer universe: one material everywhere (placed once), or
+        // cells with regions (tiled over the virtual elements).
+        let outer = if model % 4 < 2 {
+            r#"<cell id="120" universe="12" material="7"/>"#.to_string() + "\n"
+        } else {
+            random_cells(&mut rng, 12, 120, 2, &[1, 2, 3, 4], true)
+        };
         let mut universes: Vec<&str> = (0..nx * ny * nz).map(|_| ["10", "11"][rng.below(2)]).collect();
         // Both universes placed: an unplaced one would be a second root.
         universes[0] = "10";
@@ -346,8 +353,7 @@ fn random_lattices_agree_with_the_oracle() {
 <cell id="2" material="9" region="~(-90 ({clip}))"/>
 <lattice id="30"><dimension>{dims}</dimension><lower_left>{}</lower_left><pitch>{}</pitch><outer>12</outer>
 <universes>{}</universes></lattice>
-<cell id="120" universe="12" material="7"/>
-{a}{b}</geometry>"#,
+{outer}{a}{b}</geometry>"#,
             v(ll),
             v(pitch),
             universes.join(" ")
@@ -461,10 +467,10 @@ fn errors_name_the_place() {
         ),
         (r#"<geometry><cell id="1" material="1"/></geometry>"#, "cell 1 has no region and nothing around it clips it"),
         (
-            r#"<geometry><surface id="1" type="sphere" coeffs="0 0 0 1"/><cell id="1" fill="5" region="-1"/>
+            r#"<geometry><surface id="1" type="sphere" coeffs="0 0 0 1"/><cell id="1" fill="5" region="+1"/><cell id="9" material="2" region="-1"/>
             <lattice id="5"><dimension>1 1</dimension><lower_left>0 0</lower_left><pitch>1 1</pitch><outer>3</outer><universes>2</universes></lattice>
             <cell id="2" universe="2" material="1"/><cell id="3" universe="3" material="1" region="-1"/></geometry>"#,
-            "lattice 5: outer universe 3 has cell 3 with a region or a fill",
+            "lattice 5: outer universe 3 has cells with regions, so it is tiled, but the cell the lattice fills is unbounded along x",
         ),
         (
             r#"<geometry><surface id="1" type="sphere" coeffs="0 0 0 1"/><cell id="1" fill="5" region="-1"/>

@@ -149,15 +149,60 @@ impl Emitter<'_> {
 
     /// The entries of a lattice clipped by `clip` (in the lattice's frame):
     /// an instance per element that the clipping does not miss, then the
-    /// outer universe outside the elements.
+    /// outer universe outside the elements: once, in slabs around the
+    /// lattice, when all its cells are region-less material cells (it is
+    /// then the same in every virtual element); else tiled, one instance
+    /// per virtual element that meets the clipping's bounds.
     fn lattice(&mut self, l: &Lattice, clip: &[Side]) -> Result<Vec<Entry>, ImportError> {
+        let model = self.model;
+        let axes = if l.three_d { 3 } else { 2 };
+        let n = l.dimension.map(|d| d as i64);
+        let uniform_outer =
+            l.outer.filter(|o| model.cells_of(*o).all(|c| c.region.is_none() && matches!(c.fill, Fill::Material(_))));
+        // The index range: the lattice's own, or the virtual elements that
+        // the clipping's box meets when a tiled outer universe fills them.
+        let mut range = [(0, n[0]), (0, n[1]), (0, n[2])];
+        if let (Some(outer), None) = (l.outer, uniform_outer) {
+            let (lo, hi) = bounds(clip)
+                .map_err(|m| ImportError { pos: Some(l.pos), message: format!("lattice {}: {m}", l.id) })?;
+            let empty = (0..3).any(|i| lo[i] > hi[i]);
+            let mut count: i64 = 1;
+            for i in (0..axes).filter(|_| !empty) {
+                if !(lo[i].is_finite() && hi[i].is_finite()) {
+                    return err(
+                        l.pos,
+                        format!(
+                            "lattice {}: outer universe {outer} has cells with regions, so it is tiled, but the cell \
+                             the lattice fills is unbounded along {}: the tiling would not end",
+                            l.id,
+                            ["x", "y", "z"][i]
+                        ),
+                    );
+                }
+                let first = ((lo[i] - l.lower_left[i]) / l.pitch[i]).floor() as i64;
+                let last = ((hi[i] - l.lower_left[i]) / l.pitch[i]).floor() as i64;
+                range[i] = (first.min(0), (last + 1).max(n[i]));
+                count = count.saturating_mul(range[i].1 - range[i].0);
+            }
+            if count > MAX_TILED {
+                return err(
+                    l.pos,
+                    format!("lattice {}: tiling outer universe {outer} over the filled cell takes {count} elements, more than {MAX_TILED}", l.id),
+                );
+            }
+        }
         let half = Vector3::from_fn(|i, _| if i == 2 && !l.three_d { f64::INFINITY } else { l.pitch[i] / 2.0 });
-        let [nx, ny, nz] = l.dimension;
         let mut out = Vec::new();
-        for iz in 0..nz {
-            for iy in 0..ny {
-                for ix in 0..nx {
+        for iz in range[2].0..range[2].1 {
+            for iy in range[1].0..range[1].1 {
+                for ix in range[0].0..range[0].1 {
                     let index = [ix, iy, iz];
+                    let inside = (0..3).all(|i| (0..n[i]).contains(&index[i]));
+                    let u = match (inside, l.outer) {
+                        (true, _) => l.universes[(ix + n[0] * (iy + n[1] * iz)) as usize],
+                        (false, Some(outer)) => outer,
+                        (false, None) => continue,
+                    };
                     let centre = Vector3::from_fn(|i, _| {
                         if i == 2 && !l.three_d {
                             0.0
@@ -181,31 +226,17 @@ impl Emitter<'_> {
                     if missed {
                         continue;
                     }
-                    let u = l.universes[ix + nx * (iy + ny * iz)];
                     if let Some(name) = self.definition(u, l.id, &sides)? {
                         out.push(Entry { instance: Some(name), transform: steps(&motion), ..Entry::default() });
                     }
                 }
             }
         }
-        if let Some(outer) = l.outer {
-            let model = self.model;
-            if let Some(c) = model.cells_of(outer).find(|c| c.region.is_some() || !matches!(c.fill, Fill::Material(_)))
-            {
-                return err(
-                    l.pos,
-                    format!(
-                        "lattice {}: outer universe {outer} has cell {} with a region or a fill; only an outer universe of \
-                         region-less material cells is supported (it is the same in every virtual element)",
-                        l.id, c.id
-                    ),
-                );
-            }
+        if let Some(outer) = uniform_outer {
             // The space around the elements, as disjoint slabs, each
             // clipped as the lattice is.
             let lo = Vector3::from(l.lower_left);
             let hi = Vector3::from_fn(|i, _| l.lower_left[i] + l.dimension[i] as f64 * l.pitch[i]);
-            let axes = if l.three_d { 3 } else { 2 };
             for axis in 0..axes {
                 for below in [true, false] {
                     let mut sides: Vec<Side> = (0..axis).flat_map(|i| slab(i, lo[i], hi[i])).collect();
@@ -240,6 +271,33 @@ impl Emitter<'_> {
         self.shared.insert(key, name.clone());
         Ok(name)
     }
+}
+
+/// Most virtual elements a tiled outer universe may take.
+const MAX_TILED: i64 = 1 << 20;
+
+/// The box of the intersection of `sides`, by the kernel (the sides as a
+/// block of a scene of their own).
+fn bounds(sides: &[Side]) -> Result<([f64; 3], [f64; 3]), String> {
+    if sides.is_empty() {
+        return Ok(([f64::NEG_INFINITY; 3], [f64::INFINITY; 3]));
+    }
+    let block = Entry { objects: Some(sides.iter().map(Side::object).collect()), ..Entry::default() };
+    let camera = super::camera(&([-1.0; 3], [1.0; 3]));
+    let scene = crate::format::SceneFile {
+        schema: None,
+        camera,
+        settings: Default::default(),
+        lights: vec![],
+        materials: BTreeMap::new(),
+        definitions: BTreeMap::new(),
+        blocks: vec![block],
+        animation: None,
+        metadata: None,
+    };
+    let world = scene.to_world().map_err(|e| format!("the bounds of the filled cell: {e}"))?;
+    let b = world.complex.aabb();
+    Ok((b.min.into(), b.max.into()))
 }
 
 /// The plane side `s·x_axis + d ≤ 0`.

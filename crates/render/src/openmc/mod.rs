@@ -172,7 +172,7 @@ fn framing(world: &World) -> (([f64; 3], [f64; 3]), bool) {
 /// of least x and y
 /// (z up, as OpenMC models are drawn), far enough for the box's bounding
 /// sphere to fit the 40° diagonal opening.
-fn camera(frame: &([f64; 3], [f64; 3])) -> CameraSpec {
+pub(crate) fn camera(frame: &([f64; 3], [f64; 3])) -> CameraSpec {
     let (lo, hi) = frame;
     let centre = [0, 1, 2].map(|i| (lo[i] + hi[i]) / 2.0);
     let radius = ((0..3).map(|i| (hi[i] - lo[i]).powi(2)).sum::<f64>()).sqrt() / 2.0;

@@ -260,9 +260,8 @@ impl Side {
                     return (None, None);
                 }
                 let diagonal = f.a == Matrix3::from_diagonal(&f.a.diagonal()) && f.b == Vector3::zeros();
-                let lo = diagonal.then(|| {
-                    (0..3).map(|i| f.a[(i, i)] * (f.c[i].abs() - h[i]).max(0.0).powi(2)).sum::<f64>() + f.k
-                });
+                let lo = diagonal
+                    .then(|| (0..3).map(|i| f.a[(i, i)] * (f.c[i].abs() - h[i]).max(0.0).powi(2)).sum::<f64>() + f.k);
                 // Along an unbounded axis the function must not change.
                 let flat = (0..3).all(|i| h[i].is_finite() || (f.a.row(i).iter().all(|x| *x == 0.0) && f.b[i] == 0.0));
                 let hi = flat.then(|| {
