@@ -55,13 +55,15 @@ fn check_summarises_and_warns() {
                     "lights": [ { "position": [0, -5, 0] } ],
                     "materials": { "unused": {} },
                     "blocks": [ { "name": "room", "objects": [ { "sphere": { "radius": 10 } } ] },
-                                { "name": "ground", "objects": [ { "halfspace": [0, 1, 0, 3] } ] } ] }"#;
+                                { "name": "ground", "objects": [ { "halfspace": [0, 1, 0, 3] } ] },
+                                { "name": "nothing", "objects": [ { "halfspace": [0, 1, 0, 1] }, { "halfspace": [0, -1, 0, 1] } ] } ] }"#;
     let p = write_scene(dir.path(), "w.json", json);
     let o = komplex_ok(dir.path(), &["check", p.to_str().unwrap()]);
     let out = String::from_utf8_lossy(&o.stdout);
     for needle in [
-        "2 blocks",
+        "3 blocks",
         "the eye lies inside opaque block 1 \"room\"",
+        "block 3 \"nothing\" (blocks[2]) is empty: its solids share no point",
         "light 1 lies inside opaque block",
         "material \"unused\" is not used",
     ] {

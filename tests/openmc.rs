@@ -72,8 +72,7 @@ fn check_reports_cells_blocks_bounds_and_overlaps() {
     let o = komplex_ok(d, &["import-openmc", "two.xml", "--check", "--points", "400000"]);
     let out = String::from_utf8_lossy(&o.stdout);
     let line = out.lines().find(|l| l.contains("\"cell 7\" & \"cell 8\"")).unwrap_or_else(|| panic!("{out}"));
-    let numbers: Vec<f64> =
-        line.split([' ', '(', ',']).filter_map(|t| t.parse().ok()).collect();
+    let numbers: Vec<f64> = line.split([' ', '(', ',']).filter_map(|t| t.parse().ok()).collect();
     let (volume, error) = (numbers[0], numbers[1]);
     let want = 5.0 * std::f64::consts::PI / 12.0;
     assert!((volume - want).abs() < 4.0 * error, "{line}: want {want}");

@@ -49,6 +49,9 @@ pub fn check(world: &World) -> Report {
             if aabb.is_bounded() {
                 let (lo, hi) = bounds.unwrap_or(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]));
                 bounds = Some(([0, 1, 2].map(|k| lo[k].min(aabb.min[k])), [0, 1, 2].map(|k| hi[k].max(aabb.max[k]))));
+            } else if aabb.is_empty() {
+                let path = &world.block_info(id).path;
+                warnings.push(format!("block {} \"{}\" ({path}) is empty: its solids share no point", i + 1, b.name()));
             } else if kernel_bounds {
                 let path = &world.block_info(id).path;
                 warnings.push(format!("block {} \"{}\" ({path}) may be unbounded", i + 1, b.name()));

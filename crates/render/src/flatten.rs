@@ -699,6 +699,17 @@ impl std::fmt::Display for Owner<'_> {
     }
 }
 
+/// The kernel solid an object describes, placed by its own transform and
+/// complemented if it says so (no block or group transform): for a
+/// converter that asks the kernel about solids it writes.
+pub(crate) fn object_solid(o: &ObjectSpec) -> Result<Solid, SceneError> {
+    let at = Place::Text("object");
+    let solid = solid_of(o, at)?;
+    let m = steps_transform(&o.transform, at)?;
+    let solid = solid.try_transformed(&m).map_err(|e| SceneError::semantic("object", e.to_string()))?;
+    Ok(if o.complement { solid.complement() } else { solid })
+}
+
 /// The solid an object describes, before its transform.
 fn solid_of(o: &ObjectSpec, place: Place<'_>) -> Result<Solid, SceneError> {
     let keys = [

@@ -110,6 +110,11 @@ impl Emitter<'_> {
                                 ),
                             );
                         }
+                        // A term the clipping leaves nothing of (the kernel
+                        // proves it empty) makes no block.
+                        if kernel_box(&sides).is_ok_and(|b| b.is_empty()) {
+                            continue;
+                        }
                         if !self.materials.contains(m) {
                             self.materials.push(*m);
                         }
@@ -276,28 +281,26 @@ impl Emitter<'_> {
 /// Most virtual elements a tiled outer universe may take.
 const MAX_TILED: i64 = 1 << 20;
 
-/// The box of the intersection of `sides`, by the kernel (the sides as a
-/// block of a scene of their own).
+/// The box of the intersection of `sides`, by the kernel
+/// (`Complex::block_aabb`): infinite on an unbounded axis, empty when the
+/// kernel proves the intersection empty.
 fn bounds(sides: &[Side]) -> Result<([f64; 3], [f64; 3]), String> {
-    if sides.is_empty() {
-        return Ok(([f64::NEG_INFINITY; 3], [f64::INFINITY; 3]));
-    }
-    let block = Entry { objects: Some(sides.iter().map(Side::object).collect()), ..Entry::default() };
-    let camera = super::camera(&([-1.0; 3], [1.0; 3]));
-    let scene = crate::format::SceneFile {
-        schema: None,
-        camera,
-        settings: Default::default(),
-        lights: vec![],
-        materials: BTreeMap::new(),
-        definitions: BTreeMap::new(),
-        blocks: vec![block],
-        animation: None,
-        metadata: None,
-    };
-    let world = scene.to_world().map_err(|e| format!("the bounds of the filled cell: {e}"))?;
-    let b = world.complex.aabb();
+    let b = kernel_box(sides)?;
     Ok((b.min.into(), b.max.into()))
+}
+
+fn kernel_box(sides: &[Side]) -> Result<complex::Aabb, String> {
+    if sides.is_empty() {
+        return Ok(complex::Aabb::INFINITE);
+    }
+    let solids = sides
+        .iter()
+        .map(|s| crate::flatten::object_solid(&s.object()).map_err(|e| e.to_string()))
+        .collect::<Result<Vec<_>, _>>()?;
+    let block = complex::Block::new("bounds", solids, complex::Opacity::Transparent, complex::MaterialKey(0))
+        .map_err(|e| e.to_string())?;
+    let one = complex::Complex::new(vec![block], complex::ComplexOptions::default()).map_err(|e| e.to_string())?;
+    Ok(one.block_aabb(complex::BlockId(0)))
 }
 
 /// The plane side `s·x_axis + d ≤ 0`.
