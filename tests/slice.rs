@@ -225,3 +225,48 @@ fn a_slice_does_not_depend_on_the_thread_count() {
         assert!(bytes("1") == bytes("2"), "{out}");
     }
 }
+
+#[test]
+fn coloured_by_name_blocks_of_one_name_are_one_region() {
+    // The two balls of BALLS renamed alike (as an imported OpenMC cell's
+    // union terms are): by name, their union is one colour with no
+    // boundary or hatching inside; by block, the overlap is still hatched.
+    let json = BALLS.replace("\"name\": \"stone\"", "\"name\": \"glass\"");
+    let w = render::format::SceneFile::from_json(&json).unwrap().to_world().unwrap();
+    let plane = Plane::axis("z=0").unwrap();
+    let raster = Raster::new(
+        plane,
+        Extent::new(EXTENT[0], EXTENT[1], EXTENT[2], EXTENT[3]).unwrap(),
+        Some((SIZE.0 as u32, SIZE.1 as u32)),
+    )
+    .unwrap();
+    let map = slice(&w, &raster);
+    assert_eq!(map.names, ["pebble", "glass"], "in order of first appearance, rows from the top");
+    let by_name = map.rgb(render::slice::ColorBy::Name);
+    let by_block = map.rgb(render::slice::ColorBy::Block);
+    let colour = |rgb: &[u8], i: usize, j: usize| -> [u8; 3] {
+        let k = 3 * (j * SIZE.0 + i);
+        [rgb[k], rgb[k + 1], rgb[k + 2]]
+    };
+    let mut union = BTreeSet::new();
+    let mut overlap_by_block = BTreeSet::new();
+    for (i, j, inside) in clear_pixels(2.0) {
+        let k = j * SIZE.0 + i;
+        let named = (map.name[k] as usize).checked_sub(1).map_or("", |n| map.names[n].as_str());
+        match inside {
+            [true, true, false] | [true, false, false] | [false, true, false] => {
+                assert_eq!(named, "glass");
+                assert_eq!(map.named_overlap[k], 1);
+                union.insert(colour(&by_name, i, j));
+                if inside == [true, true, false] {
+                    assert_eq!(map.overlap[k], 2);
+                    overlap_by_block.insert(colour(&by_block, i, j));
+                }
+            }
+            [false, false, true] => assert_eq!(named, "pebble"),
+            _ => {}
+        }
+    }
+    assert_eq!(union.len(), 1, "by name the two balls are one colour: {union:?}");
+    assert_eq!(overlap_by_block.len(), 2, "by block the overlap is hatched: {overlap_by_block:?}");
+}
