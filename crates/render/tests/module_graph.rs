@@ -3,7 +3,7 @@
 //! from `limits` and `locate` up to `bench`, and a change to a module can
 //! only affect the layers above it.
 //!
-//! The test reads `src/*.rs` as text: a module uses another where it names
+//! The test reads `src/*.rs` (and each `src/<module>/*.rs` as one module) as text: a module uses another where it names
 //! `crate::<module>` outside its tests (`#[cfg(test)]` items) and outside
 //! comments and literals. It also refuses `crate::<item>` of an item the
 //! root re-exports (`crate::Error`): such a use hides the module it comes
@@ -26,6 +26,19 @@ fn sources() -> Sources {
         let Some(name) = path.file_stem().and_then(|s| s.to_str()) else { continue };
         if path.extension().is_some_and(|e| e == "rs") && name != "lib" && !test_only.contains(name) {
             modules.insert(name.to_string(), std::fs::read_to_string(&path).expect("a module is readable"));
+        } else if path.join("mod.rs").is_file() {
+            // A module of several files (`openmc/`) is one node: its files'
+            // text together (their `super::` uses stay inside it).
+            let mut files: Vec<_> =
+                std::fs::read_dir(&path).expect("a module directory lists").flatten().map(|e| e.path()).collect();
+            files.sort();
+            let text: String = files
+                .iter()
+                .filter(|f| f.extension().is_some_and(|e| e == "rs"))
+                .map(|f| std::fs::read_to_string(f).expect("a module is readable"))
+                .collect::<Vec<_>>()
+                .join("\n");
+            modules.insert(name.to_string(), text.replace("super::", "self::"));
         }
     }
     modules

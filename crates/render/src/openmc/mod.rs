@@ -57,9 +57,10 @@ pub struct Imported {
 
 /// Imports a `geometry.xml` or `model.xml` file; errors name the file and
 /// the line and column.
-pub fn import_file(path: &std::path::Path) -> Result<Imported, crate::Error> {
-    let text = std::fs::read_to_string(path).map_err(|source| crate::Error::Io { path: path.to_path_buf(), source })?;
-    import(&text).map_err(|e| crate::Error::Data { file: path.to_path_buf(), message: e.to_string() })
+pub fn import_file(path: &std::path::Path) -> Result<Imported, crate::error::Error> {
+    let text =
+        std::fs::read_to_string(path).map_err(|source| crate::error::Error::Io { path: path.to_path_buf(), source })?;
+    import(&text).map_err(|e| crate::error::Error::Data { file: path.to_path_buf(), message: e.to_string() })
 }
 
 /// Imports the text of a `geometry.xml` or `model.xml`.
