@@ -100,7 +100,28 @@ pub(crate) struct BlockSpans {
     /// `(block, first interval, count)`, sorted by block once collected.
     blocks: Vec<(BlockId, u32, u32)>,
     intervals: Vec<Interval>,
+    /// Scratch of the owners' sweep ([`Owners`]), kept for reuse.
+    sweep: Owners,
 }
+
+/// The owners of the pieces between cuts by a sweep along the ray, for
+/// rays that meet many blocks (a dense lattice of transparent cells):
+/// the intervals in order of entry, and the blocks holding the current
+/// piece in two heaps by priority (opaque, transparent), whose tops are
+/// dropped once their interval has ended. `O(n log n)` where testing every
+/// block on every piece is `O(n²)`.
+#[derive(Debug, Default)]
+struct Owners {
+    /// `(enter, exit, block, opaque)` of every interval, sorted by entry.
+    entries: Vec<(f64, f64, u32, bool)>,
+    /// Opaque blocks entered, the earliest on top, with their exits.
+    opaque: std::collections::BinaryHeap<(core::cmp::Reverse<u32>, u64)>,
+    /// Transparent blocks entered, likewise.
+    transparent: std::collections::BinaryHeap<(core::cmp::Reverse<u32>, u64)>,
+}
+
+/// Above this many intervals the owners come from the sweep.
+const SWEEP_FROM: usize = 16;
 
 impl BlockSpans {
     pub(crate) fn clear(&mut self) {
@@ -481,19 +502,20 @@ impl Complex {
             }
         }
         cuts.push(f64::INFINITY);
-        for w in cuts.windows(2) {
-            let (a, b) = (w[0], w[1]);
-            // No end lies strictly inside (a, b), so each interval covers all
-            // of it or none. (A midpoint test would fail between adjacent floats.)
-            let owner = owner_of(
-                spans
-                    .iter()
-                    .filter(|(_, s)| s.iter().any(|iv| iv.enter.t <= a && b <= iv.exit.t))
-                    .map(|(id, _)| (id, self.block(id).opacity())),
-            );
-            match out.segments.last_mut() {
-                Some(last) if last.owner == owner => last.end = b,
-                _ => out.segments.push(Segment { start: a, end: b, owner }),
+        if spans.intervals.len() > SWEEP_FROM {
+            self.owners_by_sweep(spans, cuts, out);
+        } else {
+            for w in cuts.windows(2) {
+                let (a, b) = (w[0], w[1]);
+                // No end lies strictly inside (a, b), so each interval covers all
+                // of it or none. (A midpoint test would fail between adjacent floats.)
+                let owner = owner_of(
+                    spans
+                        .iter()
+                        .filter(|(_, s)| s.iter().any(|iv| iv.enter.t <= a && b <= iv.exit.t))
+                        .map(|(id, _)| (id, self.block(id).opacity())),
+                );
+                push_segment(out, a, b, owner);
             }
         }
         let spans_of = |id: BlockId| spans.get(id);
@@ -584,6 +606,58 @@ fn lone_segments(spans: &BlockSpans, segments: &mut Vec<Segment>) -> bool {
 
 /// The owner among the blocks containing a point (in priority order):
 /// the first opaque one, else the first transparent one.
+/// Appends the piece `[a, b]` of `owner`, merged into the last segment if
+/// it has the same owner.
+fn push_segment(out: &mut Partition, a: f64, b: f64, owner: Option<BlockId>) {
+    match out.segments.last_mut() {
+        Some(last) if last.owner == owner => last.end = b,
+        _ => out.segments.push(Segment { start: a, end: b, owner }),
+    }
+}
+
+impl Complex {
+    /// The segments between consecutive `cuts` (sorted, without repeats,
+    /// ending with ∞), owned as [`owner_of`] says, by a sweep ([`Owners`]):
+    /// an interval covers the piece `[a, b]` when it was entered by `a` and
+    /// is left no earlier than `b`, as no end lies strictly between.
+    fn owners_by_sweep(&self, spans: &mut BlockSpans, cuts: &[f64], out: &mut Partition) {
+        let BlockSpans { blocks, intervals, sweep } = spans;
+        sweep.entries.clear();
+        for &(id, first, n) in blocks.iter() {
+            let opaque = self.block(id).opacity() == Opacity::Opaque;
+            for iv in &intervals[first as usize..(first + n) as usize] {
+                sweep.entries.push((iv.enter.t, iv.exit.t, id.0, opaque));
+            }
+        }
+        sweep.entries.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+        sweep.opaque.clear();
+        sweep.transparent.clear();
+        let mut next = 0;
+        for w in cuts.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            while let Some(&(enter, exit, id, opaque)) = sweep.entries.get(next) {
+                if enter > a {
+                    break;
+                }
+                let heap = if opaque { &mut sweep.opaque } else { &mut sweep.transparent };
+                heap.push((core::cmp::Reverse(id), exit.to_bits()));
+                next += 1;
+            }
+            // Pieces only move on, so an interval that ends before `b` is
+            // done for good.
+            for heap in [&mut sweep.opaque, &mut sweep.transparent] {
+                while heap.peek().is_some_and(|&(_, exit)| f64::from_bits(exit) < b) {
+                    heap.pop();
+                }
+            }
+            let top =
+                |h: &std::collections::BinaryHeap<(core::cmp::Reverse<u32>, u64)>| h.peek().map(|t| BlockId(t.0 .0));
+            let owner = top(&sweep.opaque).or_else(|| top(&sweep.transparent));
+            push_segment(out, a, b, owner);
+        }
+    }
+}
+
 fn owner_of(containing: impl Iterator<Item = (BlockId, Opacity)>) -> Option<BlockId> {
     let mut first_transparent = None;
     for (id, opacity) in containing {

@@ -162,131 +162,165 @@ proptest! {
         specs in complex_spec(),
         rays in proptest::collection::vec(ray_spec(), 6),
     ) {
-        let c = build(&specs);
-        let eps = c.epsilon();
-        let transparent: Vec<bool> = c.blocks().iter().map(Block::is_transparent).collect();
-        for ray in &rays {
-            let sets = c.intervals(ray);
-            let p = c.partition(ray);
+        agrees_with_membership(&specs, &rays)?;
+    }
 
-            // Structure: sets normalised; segments cover [0, ∞) in order;
-            // one event between each two segments, on a surface of one side.
-            for (_, s) in &sets {
-                prop_assert!(s.is_normalised());
-            }
-            prop_assert_eq!(p.segments.first().map(|s| s.start), Some(0.0));
-            prop_assert_eq!(p.segments.last().map(|s| s.end), Some(f64::INFINITY));
-            prop_assert_eq!(p.events.len() + 1, p.segments.len());
-            for (k, e) in p.events.iter().enumerate() {
-                let (s0, s1) = (p.segments[k], p.segments[k + 1]);
-                prop_assert!(s0.end == s1.start && s1.start == e.t && s0.owner != s1.owner);
-                prop_assert!(e.before == s0.owner && e.after == s1.owner);
-                let side = if e.entering { e.after } else { e.before };
-                prop_assert_eq!(Some(e.surface.block), side);
-                prop_assert!(e.t.is_finite() && e.point.iter().all(|x| x.is_finite()));
-                let n = e.normal.norm();
-                prop_assert!(n == 0.0 || (n - 1.0).abs() < 1e-9);
-            }
+    /// Many overlapping blocks along each ray: more intervals than the
+    /// partition tests block by block, so its owners come from the sweep.
+    #[test]
+    fn crowded_partitions_agree_with_point_membership(
+        specs in crowded_spec(),
+        rays in proptest::collection::vec(ray_spec(), 4),
+    ) {
+        agrees_with_membership(&specs, &rays)?;
+    }
+}
 
-            // Brute force over every block gives the same events.
-            let brute = brute_events(&c, ray);
-            let events: Vec<_> = p.events.iter().map(|e| (e.t, e.before, e.after)).collect();
-            prop_assert_eq!(&events, &brute);
+/// 16 to 28 blocks, every one containing the origin, in random opacity
+/// and material: a ray near the origin meets most of them.
+fn crowded_spec() -> impl Strategy<Value = Vec<Spec>> {
+    proptest::collection::vec(spec(), 16..=28).prop_map(|mut specs| {
+        for s in &mut specs {
+            s.0 = through_origin(core::mem::take(&mut s.0));
+        }
+        specs
+    })
+}
 
-            // cast_ray is the first visible event after ε, BVH or not.
-            let first = brute.iter().find(|(t, b, a)| *t > eps && visible(&c, *b, *a)).map(|x| x.0);
-            let hit = c.cast_ray(ray, f64::INFINITY);
-            prop_assert_eq!(hit.map(|h| h.t), first);
-            if let Some(h) = hit {
-                let e = p.events.iter().find(|e| e.t == h.t).expect("the hit is an event");
-                prop_assert!(c.is_visible(e));
-                prop_assert_eq!((h.block, h.solid, h.entering), (e.surface.block, e.surface.solid, e.entering));
-                prop_assert!(c.cast_ray(ray, 0.5 * h.t).is_none() || 0.5 * h.t > h.t);
-                prop_assert_eq!(c.cast_ray(ray, h.t).map(|x| x.t), Some(h.t));
-            }
+/// The partition, hits, first interfaces, segments, occlusion and sampled
+/// membership of `specs` along `rays`, each against its oracle.
+fn agrees_with_membership(specs: &[Spec], rays: &[Ray]) -> Result<(), TestCaseError> {
+    let c = build(specs);
+    let eps = c.epsilon();
+    let transparent: Vec<bool> = c.blocks().iter().map(Block::is_transparent).collect();
+    for ray in rays {
+        let sets = c.intervals(ray);
+        let p = c.partition(ray);
 
-            // first_interface is the first change after ε that is not
-            // between two transparent blocks of one material, and it is the
-            // partition's event there (surface, normal and all).
-            let one_medium = |b: Option<BlockId>, a: Option<BlockId>| match (b.map(|i| c.block(i)), a.map(|i| c.block(i))) {
-                (Some(x), Some(y)) => x.is_transparent() && y.is_transparent() && x.material() == y.material(),
-                _ => false,
-            };
-            let interface = brute.iter().find(|(t, b, a)| *t > eps && !one_medium(*b, *a)).map(|x| x.0);
-            let mut scratch = complex::Partition::default();
-            let fi = c.first_interface(ray, &mut scratch);
-            prop_assert_eq!(fi.map(|e| e.t), interface);
-            if let Some(e) = fi {
-                prop_assert_eq!(Some(&e), p.events.iter().find(|x| x.t == e.t));
-            }
+        // Structure: sets normalised; segments cover [0, ∞) in order;
+        // one event between each two segments, on a surface of one side.
+        for (_, s) in &sets {
+            prop_assert!(s.is_normalised());
+        }
+        prop_assert_eq!(p.segments.first().map(|s| s.start), Some(0.0));
+        prop_assert_eq!(p.segments.last().map(|s| s.end), Some(f64::INFINITY));
+        prop_assert_eq!(p.events.len() + 1, p.segments.len());
+        for (k, e) in p.events.iter().enumerate() {
+            let (s0, s1) = (p.segments[k], p.segments[k + 1]);
+            prop_assert!(s0.end == s1.start && s1.start == e.t && s0.owner != s1.owner);
+            prop_assert!(e.before == s0.owner && e.after == s1.owner);
+            let side = if e.entering { e.after } else { e.before };
+            prop_assert_eq!(Some(e.surface.block), side);
+            prop_assert!(e.t.is_finite() && e.point.iter().all(|x| x.is_finite()));
+            let n = e.normal.norm();
+            prop_assert!(n == 0.0 || (n - 1.0).abs() < 1e-9);
+        }
 
-            // segments_into is the partition's segments, without its events
-            // (into a buffer that held another partition).
-            let mut segments = p.clone();
-            segments.segments.reverse();
-            c.segments_into(ray, &mut segments);
-            prop_assert_eq!(&segments.segments, &p.segments);
-            prop_assert!(segments.events.is_empty());
+        // Brute force over every block gives the same events.
+        let brute = brute_events(&c, ray);
+        let events: Vec<_> = p.events.iter().map(|e| (e.t, e.before, e.after)).collect();
+        prop_assert_eq!(&events, &brute);
 
-            // segments_within(max_t) is the partition's segments that start
-            // before max_t, the last one ending at or after max_t.
-            // (Below ε too: the walk that collects the sets starts at
-            // `min(ε, max_t)`.)
-            let mut reach: Vec<f64> = vec![-1.0, 0.0, 0.5 * eps, eps, 0.5, 2.0, f64::NAN, f64::INFINITY];
-            reach.extend(p.segments.iter().flat_map(|s| [s.start, s.end, 0.5 * (s.start + s.end)]));
-            for m in reach {
-                let mut within = p.clone();
-                c.segments_within(ray, m, &mut within);
-                prop_assert!(within.events.is_empty());
-                let starting: Vec<_> = p.segments.iter().filter(|s| m.is_nan() || s.start < m).collect();
-                prop_assert_eq!(within.segments.len(), starting.len(), "max_t = {}", m);
-                for (k, (w, s)) in within.segments.iter().zip(&starting).enumerate() {
-                    prop_assert_eq!((w.start, w.owner), (s.start, s.owner), "max_t = {}", m);
-                    if k + 1 < starting.len() {
-                        prop_assert_eq!(w.end, s.end, "max_t = {}", m);
-                    } else {
-                        prop_assert!(w.end >= m && s.end >= m || w.end == s.end, "max_t = {}: last ends {} and {}", m, w.end, s.end);
-                    }
+        // cast_ray is the first visible event after ε, BVH or not.
+        let first = brute.iter().find(|(t, b, a)| *t > eps && visible(&c, *b, *a)).map(|x| x.0);
+        let hit = c.cast_ray(ray, f64::INFINITY);
+        prop_assert_eq!(hit.map(|h| h.t), first);
+        if let Some(h) = hit {
+            let e = p.events.iter().find(|e| e.t == h.t).expect("the hit is an event");
+            prop_assert!(c.is_visible(e));
+            prop_assert_eq!((h.block, h.solid, h.entering), (e.surface.block, e.surface.solid, e.entering));
+            prop_assert!(c.cast_ray(ray, 0.5 * h.t).is_none() || 0.5 * h.t > h.t);
+            prop_assert_eq!(c.cast_ray(ray, h.t).map(|x| x.t), Some(h.t));
+        }
+
+        // first_interface is the first change after ε that is not
+        // between two transparent blocks of one material, and it is the
+        // partition's event there (surface, normal and all).
+        let one_medium = |b: Option<BlockId>, a: Option<BlockId>| match (b.map(|i| c.block(i)), a.map(|i| c.block(i))) {
+            (Some(x), Some(y)) => x.is_transparent() && y.is_transparent() && x.material() == y.material(),
+            _ => false,
+        };
+        let interface = brute.iter().find(|(t, b, a)| *t > eps && !one_medium(*b, *a)).map(|x| x.0);
+        let mut scratch = complex::Partition::default();
+        let fi = c.first_interface(ray, &mut scratch);
+        prop_assert_eq!(fi.map(|e| e.t), interface);
+        if let Some(e) = fi {
+            prop_assert_eq!(Some(&e), p.events.iter().find(|x| x.t == e.t));
+        }
+
+        // segments_into is the partition's segments, without its events
+        // (into a buffer that held another partition).
+        let mut segments = p.clone();
+        segments.segments.reverse();
+        c.segments_into(ray, &mut segments);
+        prop_assert_eq!(&segments.segments, &p.segments);
+        prop_assert!(segments.events.is_empty());
+
+        // segments_within(max_t) is the partition's segments that start
+        // before max_t, the last one ending at or after max_t.
+        // (Below ε too: the walk that collects the sets starts at
+        // `min(ε, max_t)`.)
+        let mut reach: Vec<f64> = vec![-1.0, 0.0, 0.5 * eps, eps, 0.5, 2.0, f64::NAN, f64::INFINITY];
+        reach.extend(p.segments.iter().flat_map(|s| [s.start, s.end, 0.5 * (s.start + s.end)]));
+        for m in reach {
+            let mut within = p.clone();
+            c.segments_within(ray, m, &mut within);
+            prop_assert!(within.events.is_empty());
+            let starting: Vec<_> = p.segments.iter().filter(|s| m.is_nan() || s.start < m).collect();
+            prop_assert_eq!(within.segments.len(), starting.len(), "max_t = {}", m);
+            for (k, (w, s)) in within.segments.iter().zip(&starting).enumerate() {
+                prop_assert_eq!((w.start, w.owner), (s.start, s.owner), "max_t = {}", m);
+                if k + 1 < starting.len() {
+                    prop_assert_eq!(w.end, s.end, "max_t = {}", m);
+                } else {
+                    prop_assert!(
+                        w.end >= m && s.end >= m || w.end == s.end,
+                        "max_t = {}: last ends {} and {}",
+                        m,
+                        w.end,
+                        s.end
+                    );
                 }
-            }
-
-            // occluded is "the first visible event is within max_t".
-            let mut limits = vec![f64::INFINITY, 0.5, 3.0, eps];
-            if let Some(t) = first {
-                limits.extend([t, 0.5 * t, 2.0 * t, t * (1.0 - f64::EPSILON)]);
-            }
-            let mut occluder = complex::Occluder::default();
-            for m in limits {
-                let want = first.is_some_and(|t| t <= m);
-                prop_assert_eq!(c.occluded(ray, m), want, "max_t = {}", m);
-                // The hint of the previous limit, then of this one.
-                prop_assert_eq!(c.occluded_with(ray, m, &mut occluder), want, "max_t = {}, carried hint", m);
-                prop_assert_eq!(c.occluded_with(ray, m, &mut occluder), want, "max_t = {}, own hint", m);
-            }
-
-            // Sampled membership: per-block sets, partition owner, contains_point.
-            let horizon = brute.last().map_or(10.0, |e| e.0 + 2.0).min(60.0);
-            for k in 0..64 {
-                let t = eps + (k as f64 + 0.37) / 64.0 * horizon;
-                if !away_from_surfaces(&c, ray, t) {
-                    continue;
-                }
-                let x = ray.at(t);
-                let inside: Vec<bool> =
-                    c.blocks().iter().map(|b| b.solids().iter().all(|s| s.value(&x) <= 0.0)).collect();
-                for (i, &inn) in inside.iter().enumerate() {
-                    let in_set = sets.iter().any(|(id, s)| id.index() == i && s.contains(t));
-                    prop_assert_eq!(in_set, inn, "block {} at t = {}", i, t);
-                }
-                let owner = oracle_owner(&inside, &transparent);
-                prop_assert_eq!(p.owner_at(t), owner, "owner at t = {}", t);
-                prop_assert_eq!(c.contains_point(&x), owner, "contains_point at t = {}", t);
             }
         }
-        for m in [f64::INFINITY, 1.0, 0.0] {
-            packets_agree(&c, &rays, m)?;
+
+        // occluded is "the first visible event is within max_t".
+        let mut limits = vec![f64::INFINITY, 0.5, 3.0, eps];
+        if let Some(t) = first {
+            limits.extend([t, 0.5 * t, 2.0 * t, t * (1.0 - f64::EPSILON)]);
+        }
+        let mut occluder = complex::Occluder::default();
+        for m in limits {
+            let want = first.is_some_and(|t| t <= m);
+            prop_assert_eq!(c.occluded(ray, m), want, "max_t = {}", m);
+            // The hint of the previous limit, then of this one.
+            prop_assert_eq!(c.occluded_with(ray, m, &mut occluder), want, "max_t = {}, carried hint", m);
+            prop_assert_eq!(c.occluded_with(ray, m, &mut occluder), want, "max_t = {}, own hint", m);
+        }
+
+        // Sampled membership: per-block sets, partition owner, contains_point.
+        let horizon = brute.last().map_or(10.0, |e| e.0 + 2.0).min(60.0);
+        for k in 0..64 {
+            let t = eps + (k as f64 + 0.37) / 64.0 * horizon;
+            if !away_from_surfaces(&c, ray, t) {
+                continue;
+            }
+            let x = ray.at(t);
+            let inside: Vec<bool> = c.blocks().iter().map(|b| b.solids().iter().all(|s| s.value(&x) <= 0.0)).collect();
+            for (i, &inn) in inside.iter().enumerate() {
+                let in_set = sets.iter().any(|(id, s)| id.index() == i && s.contains(t));
+                prop_assert_eq!(in_set, inn, "block {} at t = {}", i, t);
+            }
+            let owner = oracle_owner(&inside, &transparent);
+            prop_assert_eq!(p.owner_at(t), owner, "owner at t = {}", t);
+            prop_assert_eq!(c.contains_point(&x), owner, "contains_point at t = {}", t);
         }
     }
+    for m in [f64::INFINITY, 1.0, 0.0] {
+        packets_agree(&c, rays, m)?;
+    }
+
+    Ok(())
 }
 
 #[test]
