@@ -238,6 +238,10 @@ struct GenerateArgs {
 struct VolumeArgs {
     #[command(flatten)]
     measure: MeasureArgs,
+    /// One row per block name: the volume the blocks of that name own together
+    /// (an imported OpenMC cell's), converged per name rather than per block.
+    #[arg(long)]
+    by_name: bool,
 }
 
 #[derive(clap::Args)]
@@ -773,6 +777,10 @@ fn generate(args: GenerateArgs) -> Result<(), Error> {
 /// `komplex volume`: every block's volumes and the union's.
 fn volume(args: VolumeArgs) -> Result<(), Error> {
     let (world, options) = args.measure.prepare()?;
+    if args.by_name {
+        let report = render::measure::volumes_by_name(&world, &options)?;
+        return args.measure.emit(|| report.to_json(), || report.to_string());
+    }
     let report = render::measure::volumes(&world, &options)?;
     args.measure.emit(|| report.to_json(), || report.to_string())
 }

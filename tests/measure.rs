@@ -76,6 +76,29 @@ fn volume_with_a_box_clips_every_block() {
 }
 
 #[test]
+fn volume_by_name_sums_the_blocks_of_each_name() {
+    // The two balls renamed alike: together they own their union, and the
+    // floor, unbounded, has no volume unless a box clips it.
+    let dir = tempdir();
+    let scene = write_scene(dir.path(), "scene.json", &SCENE.replace("\"name\": \"right\"", "\"name\": \"left\""));
+    let out = komplex_ok(dir.path(), &["volume", scene.to_str().unwrap(), "--by-name", "--json", "--seed", "5"]);
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let names = v["names"].as_array().unwrap();
+    let rows: Vec<(&str, u64)> =
+        names.iter().map(|n| (n["name"].as_str().unwrap(), n["blocks"].as_u64().unwrap())).collect();
+    assert_eq!(rows, [("left", 2), ("cube", 1), ("floor", 1)]);
+    near(&names[0]["volume"], &names[0]["error"], 2.0 * BALL - LENS);
+    near(&names[1]["volume"], &names[1]["error"], 8.0);
+    assert!(names[2]["volume"].is_null() && v["union"]["volume"].is_null());
+    let out = komplex_ok(
+        dir.path(),
+        &["volume", scene.to_str().unwrap(), "--by-name", "--box", "-6", "-6", "-6", "6", "6", "6"],
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.starts_with("name") && text.contains("floor") && text.contains("clipped to the box"), "{text}");
+}
+
+#[test]
 fn overlaps_lists_the_lens_with_a_point_inside_both_balls() {
     let v = run_json(&["overlaps"]);
     let pairs = v["overlaps"].as_array().unwrap();

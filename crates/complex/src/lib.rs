@@ -39,4 +39,6 @@ pub use partition::{BlockIntervals, Event, Partition, Segment, Surface};
 pub use quadric::Precision;
 pub use shapes::ShapeError;
 pub use spawn::{spawn_origin, Spawner, MARGIN as SPAWN_MARGIN};
-pub use volume::{BlockVolume, Estimate, Overlap, Overlaps, VolumeOptions, Volumes, DEFAULT_VOLUME_TOLERANCE};
+pub use volume::{
+    BlockVolume, Estimate, GroupVolumes, Overlap, Overlaps, VolumeOptions, Volumes, DEFAULT_VOLUME_TOLERANCE,
+};

@@ -159,6 +159,25 @@ pub struct Volumes {
     pub converged: bool,
 }
 
+/// What [`Complex::group_volumes`] measures.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GroupVolumes {
+    /// Per group, the volume its blocks own (`None` if one is unbounded and no box clips it).
+    pub groups: Vec<Option<Estimate>>,
+    /// The volume of the union.
+    pub union: Option<Estimate>,
+    /// The box the lines cover.
+    pub bounds: Aabb,
+    /// Lines of the last round, over all replicates.
+    pub lines: u64,
+    /// Replicates per round.
+    pub replicates: u32,
+    /// Rounds run.
+    pub rounds: u32,
+    /// Whether every group's and the union's standard error reached the tolerance.
+    pub converged: bool,
+}
+
 /// Two blocks whose own regions share a positive volume.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Overlap {
@@ -541,6 +560,37 @@ impl Complex {
         let union_measured = measured.iter().all(|&m| m);
         let box_vol = if bounds.is_empty() { 0.0 } else { box_volume(&bounds) };
         let q = 2 * n + 1;
+        let checked = |k: usize| if k == 2 * n { union_measured } else { measured[k % n.max(1)] };
+        let (stats, lines, rounds, converged) =
+            self.measure_rounds(options, &bounds, q, checked, |ray, lo, hi, s, sums| {
+                self.scene_line(ray, lo, hi, s, sums)
+            });
+        let at = |k: usize, m: bool| m.then(|| if box_vol > 0.0 { stats.estimate(k) } else { Estimate::default() });
+        let blocks = (0..n).map(|i| BlockVolume { own: at(i, measured[i]), owned: at(n + i, measured[i]) }).collect();
+        Ok(Volumes {
+            blocks,
+            union: at(2 * n, union_measured),
+            bounds,
+            lines,
+            replicates: options.replicates,
+            rounds,
+            converged,
+        })
+    }
+
+    /// Rounds of random lines over `bounds` measuring `q` quantities (each
+    /// line's lengths added by `line`), until every quantity `checked` says
+    /// is measured reaches the tolerance or the line cap: the statistics of
+    /// the last round, its lines, the rounds and whether it converged.
+    fn measure_rounds(
+        &self,
+        options: &VolumeOptions,
+        bounds: &Aabb,
+        q: usize,
+        checked: impl Fn(usize) -> bool,
+        line: impl Fn(&Ray, f64, f64, &mut SceneLine, &mut [f64]) + Sync,
+    ) -> (Stats, u64, u32, bool) {
+        let box_vol = if bounds.is_empty() { 0.0 } else { box_volume(bounds) };
         let mut stats = Stats::new(q);
         let (mut lines, mut rounds, mut converged) = (0, 0, true);
         if box_vol > 0.0 {
@@ -548,20 +598,20 @@ impl Complex {
             loop {
                 stats = Stats::new(q);
                 lines = run_round(
-                    &bounds,
+                    bounds,
                     options.seed.wrapping_add(u64::from(rounds) << 48),
                     options.replicates,
                     plan.per_replicate,
                     q,
                     || SceneLine { spans: BlockSpans::default(), cuts: Vec::new(), partition: Partition::default() },
-                    |ray, lo, hi, s, sums| self.scene_line(ray, lo, hi, s, sums),
+                    &line,
                     |_| {},
                     &mut stats,
                 );
                 rounds += 1;
                 let floor = options.floor * box_vol;
                 let worst = (0..q)
-                    .filter(|&k| if k == 2 * n { union_measured } else { measured[k % n.max(1)] })
+                    .filter(|&k| checked(k))
                     .map(|k| {
                         let e = stats.estimate(k);
                         e.error / (options.tolerance * e.value.max(floor))
@@ -576,11 +626,82 @@ impl Complex {
                 }
             }
         }
+        (stats, lines, rounds, converged)
+    }
+
+    /// The volume each group of blocks owns under the priority rule, and
+    /// the union's, each with a standard error: [`Complex::volumes`] for
+    /// the sums of owned volumes over the groups, `group[i]` being block
+    /// `i`'s (below `groups`; `group` has one entry per block). Only the
+    /// groups and the union need reach the tolerance, not each block, so
+    /// a model whose regions are unions of many blocks (an imported
+    /// OpenMC cell) is measured by its regions. A group with an unbounded
+    /// block is `None` unless `options.bounds` clips everything.
+    ///
+    /// ```
+    /// use complex::{Block, Complex, ComplexOptions, MaterialKey, Opacity, VolumeOptions};
+    /// use quadric::nalgebra::Vector3;
+    /// use quadric::{Quadric, Solid, Transform};
+    /// let ball = |x: f64| {
+    ///     let m = Transform::translate(Vector3::new(x, 0.0, 0.0)).unwrap();
+    ///     Block::new("ball", vec![Solid::from(Quadric::sphere().transformed(&m))], Opacity::Transparent, MaterialKey(0))
+    ///         .unwrap()
+    /// };
+    /// // Two overlapping balls in group 0, a third apart in group 1.
+    /// let scene = Complex::new(vec![ball(0.0), ball(1.0), ball(4.0)], ComplexOptions::default()).unwrap();
+    /// let v = scene.group_volumes(&VolumeOptions { tolerance: 1e-3, ..VolumeOptions::default() }, &[0, 0, 1], 2).unwrap();
+    /// let ball_volume = 4.0 / 3.0 * std::f64::consts::PI;
+    /// let lens = 5.0 / 12.0 * std::f64::consts::PI;
+    /// let pair = v.groups[0].unwrap();
+    /// assert!((pair.value - (2.0 * ball_volume - lens)).abs() < 4.0 * pair.error);
+    /// let single = v.groups[1].unwrap();
+    /// assert!((single.value - ball_volume).abs() < 4.0 * single.error);
+    /// ```
+    pub fn group_volumes(
+        &self,
+        options: &VolumeOptions,
+        group: &[u32],
+        groups: usize,
+    ) -> Result<GroupVolumes, ComplexError> {
+        options.check()?;
+        let n = self.len();
+        if group.len() != n || group.iter().any(|&g| g as usize >= groups) {
+            return Err(ComplexError::BadVolumeOption {
+                option: "group",
+                expected: "one group below the number of groups for every block",
+                value: groups as f64,
+            });
+        }
+        let ids = || (0..n).map(|i| BlockId(i as u32));
+        let finite = |id: BlockId| self.block_aabb(id).is_empty() || self.block_aabb(id).is_bounded();
+        let (bounds, clipping) = match options.bounds {
+            Some(b) => (b, true),
+            None => (ids().filter(|&id| finite(id)).fold(Aabb::EMPTY, |a, id| a.union(&self.block_aabb(id))), false),
+        };
+        let mut measured = vec![true; groups];
+        for id in ids() {
+            measured[group[id.index()] as usize] &= clipping || finite(id);
+        }
+        let union_measured = measured.iter().all(|&m| m);
+        let q = groups + 1;
+        let checked = |k: usize| if k == groups { union_measured } else { measured[k] };
+        let (stats, lines, rounds, converged) =
+            self.measure_rounds(options, &bounds, q, checked, |ray, lo, hi, s, sums| {
+                self.collect_spans(ray, f64::INFINITY, &mut s.spans);
+                self.segments_of_spans(ray, &mut s.spans, &mut s.cuts, &mut s.partition);
+                for seg in &s.partition.segments {
+                    if let Some(o) = seg.owner {
+                        let len = clipped(seg.start, seg.end, lo, hi);
+                        sums[group[o.index()] as usize] += len;
+                        sums[groups] += len;
+                    }
+                }
+            });
+        let box_vol = if bounds.is_empty() { 0.0 } else { box_volume(&bounds) };
         let at = |k: usize, m: bool| m.then(|| if box_vol > 0.0 { stats.estimate(k) } else { Estimate::default() });
-        let blocks = (0..n).map(|i| BlockVolume { own: at(i, measured[i]), owned: at(n + i, measured[i]) }).collect();
-        Ok(Volumes {
-            blocks,
-            union: at(2 * n, union_measured),
+        Ok(GroupVolumes {
+            groups: (0..groups).map(|g| at(g, measured[g])).collect(),
+            union: at(groups, union_measured),
             bounds,
             lines,
             replicates: options.replicates,

@@ -172,6 +172,115 @@ pub fn volumes(world: &World, options: &MeasureOptions) -> Result<VolumeReport, 
     })
 }
 
+/// One name's volume: the sum over the blocks of that name (`null` in
+/// JSON where one is unbounded and unclipped).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct NameVolumeReport {
+    /// The name (an imported OpenMC cell's is `cell <id>`).
+    pub name: String,
+    /// How many blocks carry it.
+    pub blocks: u32,
+    /// The volume they own under the priority rule.
+    pub volume: Option<f64>,
+    /// Its standard error.
+    pub error: Option<f64>,
+}
+
+/// Everything `komplex volume --by-name` prints.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct NamesReport {
+    /// Every name, in order of its first block.
+    pub names: Vec<NameVolumeReport>,
+    /// The union.
+    pub union: UnionReport,
+    /// The box the lines covered (as in [`VolumeReport`]).
+    #[serde(rename = "box")]
+    pub bounds: Option<[f64; 6]>,
+    /// Whether the box was given (`--box`).
+    pub clipped: bool,
+    /// The target relative standard error (of each name's volume and the union's).
+    pub tolerance: f64,
+    /// The seed of the random lines.
+    pub seed: u64,
+    /// Lines of the last round.
+    pub lines: u64,
+    /// Independent replicates per round.
+    pub replicates: u32,
+    /// Whether every standard error reached the tolerance.
+    pub converged: bool,
+}
+
+/// The volume the blocks of each name own together
+/// ([`complex::Complex::group_volumes`]): only the names' volumes and the
+/// union's need reach the tolerance.
+pub fn volumes_by_name(world: &World, options: &MeasureOptions) -> Result<NamesReport, Error> {
+    let kernel = options.kernel()?;
+    measurable(world, "volume --by-name")?;
+    let complex = &world.complex;
+    let mut names: Vec<NameVolumeReport> = Vec::new();
+    let mut index: std::collections::HashMap<&str, u32> = std::collections::HashMap::new();
+    let group: Vec<u32> = (0..complex.len() as u32)
+        .map(|i| {
+            let name = complex.block(BlockId(i)).name();
+            let g = *index.entry(name).or_insert_with(|| {
+                names.push(NameVolumeReport { name: name.to_string(), blocks: 0, volume: None, error: None });
+                names.len() as u32 - 1
+            });
+            names[g as usize].blocks += 1;
+            g
+        })
+        .collect();
+    let v = complex.group_volumes(&kernel, &group, names.len()).map_err(|e| Error::Options(e.to_string()))?;
+    for (row, e) in names.iter_mut().zip(&v.groups) {
+        (row.volume, row.error) = split(*e);
+    }
+    let (volume, error) = split(v.union);
+    Ok(NamesReport {
+        names,
+        union: UnionReport { volume, error },
+        bounds: box6(&v.bounds),
+        clipped: options.bounds.is_some(),
+        tolerance: options.tolerance,
+        seed: options.seed,
+        lines: v.lines,
+        replicates: v.replicates,
+        converged: v.converged,
+    })
+}
+
+impl NamesReport {
+    /// The report as pretty-printed JSON (`komplex volume --by-name --json`).
+    pub fn to_json(&self) -> String {
+        json(self)
+    }
+}
+
+impl fmt::Display for NamesReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let w = self.names.iter().map(|b| b.name.chars().count()).max().unwrap_or(0).max(4);
+        writeln!(f, "{:<w$} {:>7} {:>24}", "name", "blocks", "owned volume")?;
+        for n in &self.names {
+            writeln!(f, "{:<w$} {:>7} {:>24}", n.name, n.blocks, pm(n.volume, n.error))?;
+        }
+        writeln!(f, "union: {}", pm(self.union.volume, self.union.error))?;
+        match (self.bounds, self.clipped) {
+            (Some(b), true) => writeln!(f, "clipped to the box {:?} .. {:?}", &b[..3], &b[3..])?,
+            (Some(b), false) => writeln!(f, "box: {:?} .. {:?}", &b[..3], &b[3..])?,
+            (None, _) => {}
+        }
+        write!(
+            f,
+            "{} lines in {} replicates, seed {}, tolerance {:e}",
+            self.lines, self.replicates, self.seed, self.tolerance
+        )?;
+        if self.converged {
+            writeln!(f)
+        } else {
+            writeln!(f, "\nwarning: the tolerance was not reached within the line cap")
+        }
+    }
+}
+
 /// Pretty-printed JSON with a final newline.
 fn json<T: Serialize>(value: &T) -> String {
     // Plain structs of numbers, strings and options: serialising cannot fail.

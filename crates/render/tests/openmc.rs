@@ -5,7 +5,7 @@
 
 use std::collections::BTreeMap;
 
-use render::measure::{volumes, MeasureOptions};
+use render::measure::{volumes_by_name, MeasureOptions};
 use render::openmc::{import, Imported};
 use render::world::World;
 
@@ -133,16 +133,11 @@ fn lattice_elements_share_definitions() {
     assert!((lo[2] + 30.0).abs() < 1e-6 && (hi[2] - 110.236).abs() < 1e-6, "{lo:?} {hi:?}");
 }
 
-/// Owned volumes summed per block name.
+/// The volume each cell owns (its blocks together), with its standard error.
 fn cell_volumes(world: &World, bounds: Option<[f64; 6]>) -> BTreeMap<String, (f64, f64)> {
-    let report = volumes(world, &MeasureOptions { tolerance: 2e-3, seed: 3, bounds }).unwrap();
-    let mut out: BTreeMap<String, (f64, f64)> = BTreeMap::new();
-    for b in &report.blocks {
-        let e = out.entry(b.name.clone()).or_default();
-        e.0 += b.volume.unwrap();
-        e.1 = (e.1 * e.1 + b.error.unwrap().powi(2)).sqrt();
-    }
-    out
+    let report = volumes_by_name(world, &MeasureOptions { tolerance: 2e-3, seed: 3, bounds }).unwrap();
+    assert!(report.converged);
+    report.names.iter().map(|n| (n.name.clone(), (n.volume.unwrap(), n.error.unwrap()))).collect()
 }
 
 #[test]
