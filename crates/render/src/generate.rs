@@ -43,7 +43,8 @@ fn light(position: [f64; 3], c: f64) -> LightSpec {
     LightSpec { position, color: Some([c; 3]), diffuse: None, specular: None }
 }
 
-fn camera(eye: [f64; 3], direction: [f64; 3], aperture: f64) -> CameraSpec {
+/// A 640 × 480 perspective camera, y up.
+pub(crate) fn camera(eye: [f64; 3], direction: [f64; 3], aperture: f64) -> CameraSpec {
     CameraSpec {
         eye: Animated::Fixed(eye),
         direction: Animated::Fixed(direction),

@@ -262,22 +262,14 @@ impl fmt::Display for NamesReport {
         for n in &self.names {
             writeln!(f, "{:<w$} {:>7} {:>24}", n.name, n.blocks, pm(n.volume, n.error))?;
         }
-        writeln!(f, "union: {}", pm(self.union.volume, self.union.error))?;
-        match (self.bounds, self.clipped) {
-            (Some(b), true) => writeln!(f, "clipped to the box {:?} .. {:?}", &b[..3], &b[3..])?,
-            (Some(b), false) => writeln!(f, "box: {:?} .. {:?}", &b[..3], &b[3..])?,
-            (None, _) => {}
-        }
-        write!(
+        footer(
             f,
-            "{} lines in {} replicates, seed {}, tolerance {:e}",
-            self.lines, self.replicates, self.seed, self.tolerance
-        )?;
-        if self.converged {
-            writeln!(f)
-        } else {
-            writeln!(f, "\nwarning: the tolerance was not reached within the line cap")
-        }
+            &self.union,
+            self.bounds,
+            self.clipped,
+            (self.lines, self.replicates, self.seed, self.tolerance),
+            self.converged,
+        )
     }
 }
 
@@ -298,6 +290,30 @@ impl OverlapsReport {
     /// The report as pretty-printed JSON (`komplex overlaps --json`).
     pub fn to_json(&self) -> String {
         json(self)
+    }
+}
+
+/// The lines under a volume table: the union, the box, the lines and
+/// whether the tolerance was reached.
+fn footer(
+    f: &mut fmt::Formatter<'_>,
+    union: &UnionReport,
+    bounds: Option<[f64; 6]>,
+    clipped: bool,
+    (lines, replicates, seed, tolerance): (u64, u32, u64, f64),
+    converged: bool,
+) -> fmt::Result {
+    writeln!(f, "union: {}", pm(union.volume, union.error))?;
+    match (bounds, clipped) {
+        (Some(b), true) => writeln!(f, "clipped to the box {:?} .. {:?}", &b[..3], &b[3..])?,
+        (Some(b), false) => writeln!(f, "box: {:?} .. {:?}", &b[..3], &b[3..])?,
+        (None, _) => {}
+    }
+    write!(f, "{lines} lines in {replicates} replicates, seed {seed}, tolerance {tolerance:e}")?;
+    if converged {
+        writeln!(f)
+    } else {
+        writeln!(f, "\nwarning: the tolerance was not reached within the line cap")
     }
 }
 
@@ -323,22 +339,14 @@ impl fmt::Display for VolumeReport {
                 pm(b.own_volume, b.own_error)
             )?;
         }
-        writeln!(f, "union: {}", pm(self.union.volume, self.union.error))?;
-        match (self.bounds, self.clipped) {
-            (Some(b), true) => writeln!(f, "clipped to the box {:?} .. {:?}", &b[..3], &b[3..])?,
-            (Some(b), false) => writeln!(f, "box: {:?} .. {:?}", &b[..3], &b[3..])?,
-            (None, _) => {}
-        }
-        write!(
+        footer(
             f,
-            "{} lines in {} replicates, seed {}, tolerance {:e}",
-            self.lines, self.replicates, self.seed, self.tolerance
-        )?;
-        if self.converged {
-            writeln!(f)
-        } else {
-            writeln!(f, "\nwarning: the tolerance was not reached within the line cap")
-        }
+            &self.union,
+            self.bounds,
+            self.clipped,
+            (self.lines, self.replicates, self.seed, self.tolerance),
+            self.converged,
+        )
     }
 }
 

@@ -28,7 +28,7 @@ pub mod surface;
 use std::collections::BTreeMap;
 use std::fmt;
 
-use crate::format::{CameraSpec, ColourSpec, LightSpec, MaterialSpec, ProjectionSpec, SceneFile};
+use crate::format::{CameraSpec, ColourSpec, LightSpec, MaterialSpec, SceneFile};
 use crate::keys::Animated;
 use crate::world::{Model as Specular, Settings, World};
 
@@ -184,18 +184,8 @@ pub(crate) fn camera(frame: &([f64; 3], [f64; 3])) -> CameraSpec {
     let dir = [0.55, 0.65, -0.52];
     let norm = (dir.iter().map(|x| x * x).sum::<f64>()).sqrt();
     let eye = [0, 1, 2].map(|i| centre[i] - dir[i] / norm * distance);
-    CameraSpec {
-        eye: Animated::Fixed(eye),
-        direction: Animated::Fixed([0, 1, 2].map(|i| centre[i] - eye[i])),
-        up: Animated::Fixed([0.0, 0.0, 1.0]),
-        width: 640,
-        height: 480,
-        aperture,
-        projection: ProjectionSpec::Perspective,
-        diagonal: None,
-        lens_radius: 0.0,
-        focus_distance: None,
-    }
+    let direction = [0, 1, 2].map(|i| centre[i] - eye[i]);
+    CameraSpec { up: Animated::Fixed([0.0, 0.0, 1.0]), ..crate::generate::camera(eye, direction, aperture) }
 }
 
 /// Two cells that share space, found by sampling points.
