@@ -248,6 +248,9 @@ struct VolumeArgs {
 struct OverlapsArgs {
     #[command(flatten)]
     measure: MeasureArgs,
+    /// Only pairs of blocks of different names (an imported OpenMC cell's blocks are one region).
+    #[arg(long)]
+    by_name: bool,
 }
 
 #[derive(clap::Args)]
@@ -788,7 +791,11 @@ fn volume(args: VolumeArgs) -> Result<(), Error> {
 /// `komplex overlaps`: the pairs of blocks that share a positive volume.
 fn overlaps(args: OverlapsArgs) -> Result<(), Error> {
     let (world, options) = args.measure.prepare()?;
-    let report = render::measure::overlaps(&world, &options)?;
+    let report = if args.by_name {
+        render::measure::overlaps_between_names(&world, &options)?
+    } else {
+        render::measure::overlaps(&world, &options)?
+    };
     args.measure.emit(|| report.to_json(), || report.to_string())
 }
 

@@ -77,3 +77,31 @@ fn check_reports_cells_blocks_bounds_and_overlaps() {
     let want = 5.0 * std::f64::consts::PI / 12.0;
     assert!((volume - want).abs() < 4.0 * error, "{line}: want {want}");
 }
+
+#[test]
+fn overlaps_by_name_leaves_out_the_terms_of_one_cell() {
+    let dir = tempdir();
+    let d = dir.path();
+    komplex_ok(d, &["import-openmc", &model("complex_cell"), "-o", "cc.json"]);
+    let all = komplex_ok(d, &["overlaps", "cc.json", "--box", "-10", "-10", "-1", "10", "10", "1", "--json"]);
+    let all: serde_json::Value = serde_json::from_slice(&all.stdout).unwrap();
+    let pairs = all["overlaps"].as_array().unwrap();
+    // Cell 2's four terms overlap at the corners of its square ring.
+    assert!(!pairs.is_empty() && pairs.iter().all(|p| p["a_name"] == p["b_name"]), "{pairs:?}");
+    let named =
+        komplex_ok(d, &["overlaps", "cc.json", "--box", "-10", "-10", "-1", "10", "10", "1", "--json", "--by-name"]);
+    let named: serde_json::Value = serde_json::from_slice(&named.stdout).unwrap();
+    assert_eq!(named["overlaps"].as_array().unwrap().len(), 0, "{named}");
+    // Two cells that do overlap are still found.
+    let xml = r#"<geometry>
+      <surface id="1" type="sphere" coeffs="0 0 0 1"/><surface id="2" type="sphere" coeffs="1 0 0 1"/>
+      <cell id="7" material="1" region="-1"/><cell id="8" material="2" region="-2"/></geometry>"#;
+    std::fs::write(d.join("two.xml"), xml).unwrap();
+    komplex_ok(d, &["import-openmc", "two.xml", "-o", "two.json"]);
+    let o = komplex_ok(d, &["overlaps", "two.json", "--by-name", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let pair = &v["overlaps"][0];
+    assert_eq!((pair["a_name"].as_str(), pair["b_name"].as_str()), (Some("cell 7"), Some("cell 8")));
+    let (volume, error) = (pair["volume"].as_f64().unwrap(), pair["error"].as_f64().unwrap());
+    assert!((volume - 5.0 * std::f64::consts::PI / 12.0).abs() < 4.0 * error, "{pair}");
+}

@@ -388,10 +388,25 @@ pub struct OverlapsReport {
 
 /// Finds every pair of blocks whose own regions share a positive volume.
 pub fn overlaps(world: &World, options: &MeasureOptions) -> Result<OverlapsReport, Error> {
+    overlaps_among(world, options, |_, _| true)
+}
+
+/// [`overlaps`] among the pairs of blocks of different names only (the
+/// blocks of one imported OpenMC cell may overlap: they are one region).
+pub fn overlaps_between_names(world: &World, options: &MeasureOptions) -> Result<OverlapsReport, Error> {
+    let complex = &world.complex;
+    overlaps_among(world, options, |a, b| complex.block(a).name() != complex.block(b).name())
+}
+
+fn overlaps_among(
+    world: &World,
+    options: &MeasureOptions,
+    include: impl Fn(BlockId, BlockId) -> bool,
+) -> Result<OverlapsReport, Error> {
     let kernel = VolumeOptions { max_pairs: usize::MAX - 1, ..options.kernel()? };
     measurable(world, "overlaps")?;
     let complex = &world.complex;
-    let found = complex.overlaps(&kernel).map_err(|e| Error::Options(e.to_string()))?;
+    let found = complex.overlaps_where(&kernel, include).map_err(|e| Error::Options(e.to_string()))?;
     let name = |id: BlockId| complex.block(id).name().to_string();
     Ok(OverlapsReport {
         overlaps: found
