@@ -50,6 +50,16 @@ fn imported_models_work_with_every_command() {
             assert!(hits > 48 * 36 / 10, "{name}: the camera sees {hits} pixels of the model");
         }
     }
+    // The imported scenes are valid by the JSON Schema too.
+    let schema = root().join("docs/scene.schema.json");
+    let files: Vec<std::path::PathBuf> =
+        ["quadric_surfaces", "complex_cell", "lattice"].iter().map(|n| d.join(format!("{n}.json"))).collect();
+    let mut args: Vec<&std::path::Path> = vec![schema.as_path()];
+    args.extend(files.iter().map(|p| p.as_path()));
+    if let Some(out) = crate::support::python("validate_schema.py", &args) {
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.lines().count() == 3 && text.lines().all(|l| l.starts_with("ok ")), "{text}");
+    }
     // stdout without -o is the same scene.
     let o = komplex_ok(d, &["import-openmc", &model("complex_cell")]);
     assert_eq!(o.stdout, std::fs::read(d.join("complex_cell.json")).unwrap());
