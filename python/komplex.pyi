@@ -115,3 +115,9 @@ def load(path: Union[str, PathLike]) -> Scene:
 
 def loads(json: str) -> Scene:
     """Reads a scene from JSON text. Raises ``SceneError`` for a bad scene."""
+
+def import_openmc(path: Union[str, PathLike]) -> Scene:
+    """Imports an OpenMC geometry (``geometry.xml`` or a ``model.xml``) as
+    ``komplex import-openmc`` does; each block is named ``cell <id>`` after
+    its OpenMC cell. Raises ``ValueError`` naming the line and column of bad
+    input, ``FileNotFoundError`` or ``OSError`` when it cannot be read."""

@@ -56,6 +56,22 @@ fn loads(py: Python<'_>, json: &str) -> PyResult<Scene> {
     Ok(Scene::new(world))
 }
 
+/// Imports an OpenMC geometry (`geometry.xml`, or a `model.xml` holding
+/// one) as a scene, as `komplex import-openmc` does: each block is named
+/// `cell <id>` after its OpenMC cell, so `classify` answers OpenMC's cell
+/// at each point. Raises `ValueError` naming the line and column of bad
+/// input, `FileNotFoundError`/`OSError` when the file cannot be read.
+#[pyfunction]
+fn import_openmc(py: Python<'_>, path: PathBuf) -> PyResult<Scene> {
+    let world = py
+        .detach(|| {
+            let imported = render::openmc::import_file(&path)?;
+            imported.scene.to_world().map_err(|source| render::Error::Scene { file: path.clone(), source })
+        })
+        .map_err(to_py)?;
+    Ok(Scene::new(world))
+}
+
 /// A loaded scene: its blocks under the priority rule, camera, lights and
 /// materials.
 #[pyclass(frozen, module = "komplex")]
@@ -485,6 +501,7 @@ fn from_json<'py>(py: Python<'py>, text: &str) -> PyResult<Bound<'py, PyAny>> {
 fn komplex(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(load, m)?)?;
     m.add_function(wrap_pyfunction!(loads, m)?)?;
+    m.add_function(wrap_pyfunction!(import_openmc, m)?)?;
     m.add_class::<Scene>()?;
     m.add_class::<Hits>()?;
     m.add_class::<Traces>()?;

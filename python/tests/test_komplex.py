@@ -306,3 +306,23 @@ def test_overlaps_find_the_lens(balls):
     assert abs(o["volume"] - shared) <= 4 * o["error"]
     x, y, z = o["point"]
     assert x * x + y * y + z * z <= 1.5**2 and (x - 1.5) ** 2 + y * y + z * z <= 4
+
+
+def test_import_openmc_classifies_points_into_openmc_cells():
+    # The README points of OpenMC's lattice test model (tests/openmc/README.md).
+    scene = komplex.import_openmc(ROOT / "tests" / "openmc" / "lattice" / "geometry.xml")
+    names = [b["name"] for b in scene.blocks]
+    points = [[0.01, 0.01, 50], [0.7, 0.01, 50], [21.336, 0.01, 50], [0.72, 0.1, 4.5],
+              [0.01, 0.01, 3.3], [0.01, 0.01, -10], [40, 40, 50]]
+    owners = scene.classify(points)
+    got = [names[k - 1] if k else None for k in owners.tolist()]
+    assert got == ["cell 23", "cell 24", "cell 47", "cell 31", "cell 21", "cell 1", None]
+
+
+def test_import_openmc_errors_name_the_place(tmp_path):
+    bad = tmp_path / "bad.xml"
+    bad.write_text('<geometry><surface id="1" type="spere" coeffs="0 0 0 1"/></geometry>')
+    with pytest.raises(ValueError, match="line 1, column 11: surface 1: unknown surface type `spere`"):
+        komplex.import_openmc(bad)
+    with pytest.raises(FileNotFoundError):
+        komplex.import_openmc(tmp_path / "none.xml")
