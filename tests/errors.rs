@@ -1232,6 +1232,11 @@ fn bad_openmc_imports_exit_1_and_name_the_place() {
             "line 1, column 11: cell 1 has no region and nothing around it clips it: it would fill all of space",
         ),
         (
+            "empty",
+            r#"<geometry><surface id="1" type="x-plane" coeffs="0"/><cell id="3" material="1" region="-1 1"/></geometry>"#,
+            "line 1, column 54: root universe 0: no cell with a non-empty region",
+        ),
+        (
             "rotation",
             r#"<geometry><surface id="1" type="sphere" coeffs="0 0 0 1"/><cell id="1" material="1" region="-1" rotation="0 0 90"/></geometry>"#,
             "line 1, column 59: cell 1: `rotation` needs a `fill` (the cell has a material)",

@@ -549,14 +549,7 @@ impl Complex {
     pub fn volumes(&self, options: &VolumeOptions) -> Result<Volumes, ComplexError> {
         options.check()?;
         let n = self.len();
-        let ids = || (0..n).map(|i| BlockId(i as u32));
-        let finite = |id: BlockId| self.block_aabb(id).is_empty() || self.block_aabb(id).is_bounded();
-        let (bounds, clipped) = match options.bounds {
-            Some(b) => (b, true),
-            None => (ids().filter(|&id| finite(id)).fold(Aabb::EMPTY, |a, id| a.union(&self.block_aabb(id))), false),
-        };
-        // A block is measured if it is bounded or clipped; an empty one is 0.
-        let measured: Vec<bool> = ids().map(|id| clipped || finite(id)).collect();
+        let (bounds, measured) = self.measured_blocks(options);
         let union_measured = measured.iter().all(|&m| m);
         let box_vol = if bounds.is_empty() { 0.0 } else { box_volume(&bounds) };
         let q = 2 * n + 1;
@@ -576,6 +569,21 @@ impl Complex {
             rounds,
             converged,
         })
+    }
+
+    /// The box the lines cover (`options.bounds`, else the box around the
+    /// bounded blocks) and, per block, whether it is measured: bounded or
+    /// clipped (an empty block is bounded, of volume 0).
+    fn measured_blocks(&self, options: &VolumeOptions) -> (Aabb, Vec<bool>) {
+        let ids = || (0..self.len()).map(|i| BlockId(i as u32));
+        let finite = |id: BlockId| self.block_aabb(id).is_empty() || self.block_aabb(id).is_bounded();
+        match options.bounds {
+            Some(b) => (b, vec![true; self.len()]),
+            None => (
+                ids().filter(|&id| finite(id)).fold(Aabb::EMPTY, |a, id| a.union(&self.block_aabb(id))),
+                ids().map(finite).collect(),
+            ),
+        }
     }
 
     /// Rounds of random lines over `bounds` measuring `q` quantities (each
@@ -672,15 +680,10 @@ impl Complex {
                 value: groups as f64,
             });
         }
-        let ids = || (0..n).map(|i| BlockId(i as u32));
-        let finite = |id: BlockId| self.block_aabb(id).is_empty() || self.block_aabb(id).is_bounded();
-        let (bounds, clipping) = match options.bounds {
-            Some(b) => (b, true),
-            None => (ids().filter(|&id| finite(id)).fold(Aabb::EMPTY, |a, id| a.union(&self.block_aabb(id))), false),
-        };
+        let (bounds, blocks) = self.measured_blocks(options);
         let mut measured = vec![true; groups];
-        for id in ids() {
-            measured[group[id.index()] as usize] &= clipping || finite(id);
+        for (i, m) in blocks.into_iter().enumerate() {
+            measured[group[i] as usize] &= m;
         }
         let union_measured = measured.iter().all(|&m| m);
         let q = groups + 1;

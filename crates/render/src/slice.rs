@@ -348,14 +348,19 @@ pub fn slice(world: &World, raster: &Raster) -> Slice {
             for ((p, o), named) in p.iter().zip(o).zip(named) {
                 complex.blocks_containing(p, &mut inside);
                 *o = inside.len() as u32;
-                seen.clear();
-                for b in &inside {
-                    let n = complex.block(*b).name();
-                    if !seen.contains(&n) {
-                        seen.push(n);
+                // One block or none is one name or none: names are looked
+                // up only where blocks overlap.
+                *named = *o;
+                if inside.len() >= 2 {
+                    seen.clear();
+                    for b in &inside {
+                        let n = complex.block(*b).name();
+                        if !seen.contains(&n) {
+                            seen.push(n);
+                        }
                     }
+                    *named = seen.len() as u32;
                 }
-                *named = seen.len() as u32;
             }
         });
     }

@@ -56,7 +56,11 @@ pub fn emit(model: &Model) -> Result<Emitted, ImportError> {
     };
     let blocks = e.universe(model.root, &[])?;
     if blocks.is_empty() {
-        return Err(ImportError { pos: None, message: "the root universe has no cell with a non-empty region".into() });
+        let pos = model.cells_of(model.root).next().map(|c| c.pos);
+        return Err(ImportError {
+            pos,
+            message: format!("root universe {}: no cell with a non-empty region", model.root),
+        });
     }
     Ok(Emitted { blocks, definitions: e.definitions, materials: e.materials })
 }
